@@ -1,0 +1,19 @@
+// mocapctl: control client for a running mocapd (talks over its Unix-domain control socket).
+#include <cstdio>
+
+#include "mocap/core/cli_args.hpp"
+
+int main(int argc, char** argv) {
+  mocap::CliArgs args;
+  args.flag("help", "show this help").flag("version", "print the version");
+  if (!args.parse(argc, argv)) {
+    std::fprintf(stderr, "mocapctl: %s\n", args.error().c_str());
+    return 2;
+  }
+  if (args.has("version")) {
+    std::printf("mocapctl 0.1.0\n");
+    return 0;
+  }
+  std::printf("usage: mocapctl COMMAND [options]\n%s", args.help().c_str());
+  return args.has("help") ? 0 : 2;
+}

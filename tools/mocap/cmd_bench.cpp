@@ -1,0 +1,13 @@
+// mocap bench: not yet implemented (placeholder replaced by its issue's work).
+#include <cstdio>
+
+#include "commands.hpp"
+
+namespace mocap::cmd {
+
+int run_bench(int, char**) {
+  std::fprintf(stderr, "mocap bench: not implemented yet\n");
+  return 2;
+}
+
+}  // namespace mocap::cmd

@@ -1,0 +1,13 @@
+// mocap devices: not yet implemented (placeholder replaced by its issue's work).
+#include <cstdio>
+
+#include "commands.hpp"
+
+namespace mocap::cmd {
+
+int run_devices(int, char**) {
+  std::fprintf(stderr, "mocap devices: not implemented yet\n");
+  return 2;
+}
+
+}  // namespace mocap::cmd
