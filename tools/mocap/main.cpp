@@ -19,6 +19,7 @@ constexpr Command kCommands[] = {
     {"export", mocap::cmd::run_export, "convert a recorded session to BVH or CSV"},
     {"devices", mocap::cmd::run_devices, "list connected devices that a driver supports"},
     {"bench", mocap::cmd::run_bench, "benchmarks (filter, skeleton, latency, capacity, ...)"},
+    {"evaluate", mocap::cmd::run_evaluate, "score attitude filters on the BROAD trials"},
 };
 
 void usage(FILE* out) {
