@@ -57,11 +57,16 @@ void AttitudeFilter::refresh_coeffs() {
   c_.mag_norm_dip_lp = filt::butterworth(p_.mag_current_tau_s, c_.mag_ts_s);
   c_.k_mag = filt::gain_from_tau(p_.tau_mag_s, c_.mag_ts_s);
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
+  c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
 
+  // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
+  c_.bias_decim = std::max(1, static_cast<int>(std::lround(0.01 / c_.acc_ts_s)));
+  c_.bias_ts_s = c_.bias_decim * c_.acc_ts_s;
+  c_.bias_lp = filt::butterworth(p_.tau_acc_s, c_.bias_ts_s);
   // Bias KF in units of (0.01 deg/s)^2: uncertainty grows by 0.1 deg/s per forgetting time.
   auto sq = [](double x) { return x * x; };
   c_.bias_p0 = sq(p_.bias_sigma_init_deg_s * 100.0);
-  c_.bias_v = sq(0.1 * 100.0) * c_.acc_ts_s / p_.bias_forgetting_time_s;
+  c_.bias_v = sq(0.1 * 100.0) * c_.bias_ts_s / p_.bias_forgetting_time_s;
   const double p_motion = sq(p_.bias_sigma_motion_deg_s * 100.0);
   c_.bias_motion_w = sq(p_motion) / c_.bias_v + p_motion;
   c_.bias_vertical_w = c_.bias_motion_w / std::max(p_.bias_vertical_forgetting, 1e-10);
@@ -158,11 +163,9 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
     st_.q_gyr = st_.q_gyr * dq;
     st_.q_gyr.normalize();
   }
-  // Heading uncertainty grows with vertical-bias uncertainty and time.
-  if (p_.heading_kalman) {
-    const double sb_rad_s = std::sqrt(std::max(st_.bias_p(2, 2), 0.0)) * 0.01 * kDeg;
-    st_.delta_var_rad2 += (sb_rad_s * sb_rad_s) * t * 1.0;
-  }
+  // Heading uncertainty grows with the bias uncertainty (about the vertical) over time.
+  const double sb_rad_s = std::sqrt(std::max(st_.bias_p(2, 2), 0.0)) * 0.01 * kDeg;
+  st_.delta_var_rad2 += sb_rad_s * sb_rad_s * t + 1e-7 * t;
 }
 
 void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
@@ -199,9 +202,15 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   st_.q_acc = qc * st_.q_acc;
   st_.q_acc.normalize();
 
-  update_bias(acc_e, ts);
+  st_.bias_corr_sum += acc_e.head<2>();
+  if (++st_.bias_n >= c_.bias_decim) {
+    update_bias(Eigen::Vector3d(st_.bias_corr_sum.x(), st_.bias_corr_sum.y(), 1.0), c_.bias_ts_s);
+    st_.bias_n = 0;
+    st_.bias_corr_sum.setZero();
+  }
 }
 
+// acc_e holds the horizontal inclination corrections summed over the last ts seconds.
 void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   if (!st_.bias_p_init) {
     st_.bias_p = Eigen::Matrix3d::Identity() * c_.bias_p0;
@@ -216,12 +225,12 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         rr[3 * i + j] = r6(i, j);
-    const auto& rl = st_.motion_r_lp.step(rr, c_.acc_lp, p_.tau_acc_s, ts);
+    const auto& rl = st_.motion_r_lp.step(rr, c_.bias_lp, p_.tau_acc_s, ts);
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         r_lp(i, j) = rl[3 * i + j];
     const double rb[2] = {r6.row(0).dot(st_.bias_rad_s), r6.row(1).dot(st_.bias_rad_s)};
-    const auto& bl = st_.motion_bias_lp.step(rb, c_.acc_lp, p_.tau_acc_s, ts);
+    const auto& bl = st_.motion_bias_lp.step(rb, c_.bias_lp, p_.tau_acc_s, ts);
     rb_lp = Eigen::Vector2d(bl[0], bl[1]);
   }
 
@@ -303,6 +312,21 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
   }
 
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
+  if (p_.mag_dist_rejection && p_.mag_consistency_th_deg > 0) {
+    // Gyro-consistency: wobble of the measured heading around its short-term mean.
+    if (!st_.mag_err_init) {
+      st_.mag_err_mean_rad = err;
+      st_.mag_err_init = true;
+    }
+    const double dev = wrap_pi(err - st_.mag_err_mean_rad);
+    st_.mag_err_mean_rad = wrap_pi(st_.mag_err_mean_rad + c_.k_mag_consistency * dev);
+    st_.mag_err_var_rad2 += c_.k_mag_consistency * (dev * dev - st_.mag_err_var_rad2);
+    const double th = p_.mag_consistency_th_deg * kDeg;
+    if (st_.mag_err_var_rad2 > th * th) {
+      st_.mag_disturbed = true;
+      st_.mag_undisturbed_t_s = 0;
+    }
+  }
   double k = c_.k_mag;
   if (p_.mag_dist_rejection) {
     if (st_.mag_disturbed) {
@@ -323,16 +347,19 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
   }
   (void)dt_s;
   st_.delta_rad = wrap_pi(st_.delta_rad + k * err);
+  // Variance after a first-order update with gain k and a (2 deg)^2 measurement variance.
+  constexpr double kMeasVar = (2 * kDeg) * (2 * kDeg);
+  st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * kMeasVar;
+  st_.q_delta = heading_quat(st_.delta_rad);
 }
 
 Eigen::Quaterniond AttitudeFilter::q_earth_sensor_6d() const {
-  return (st_.q_acc * st_.q_gyr).normalized();
+  return st_.q_acc * st_.q_gyr;
 }
 
 Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
-  const Eigen::Quaterniond q6 = q_earth_sensor_6d();
-  if (!st_.have_mag) return q6;
-  return (heading_quat(st_.delta_rad) * q6).normalized();
+  if (!st_.have_mag) return st_.q_acc * st_.q_gyr;
+  return st_.q_delta * (st_.q_acc * st_.q_gyr);
 }
 
 double AttitudeFilter::heading_sigma_rad() const {

@@ -46,7 +46,12 @@ struct FilterParams {
   double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
   double mag_rejection_factor = 2.0;       ///< gain divisor after that
   // --- extensions beyond VQF (false/0 = plain VQF behaviour) ---
-  bool heading_kalman = true;  ///< scalar Kalman heading with disturbance trust
+  /// Gyro-consistency test: in a homogeneous field the magnetometer heading seen in the
+  /// gyro-stabilised 6D frame only drifts slowly; RMS wobble of it (about its 1 s mean) above
+  /// this threshold marks the field as disturbed (gradients, hard iron moving with the sensor).
+  /// 0 disables (default: on BROAD it rejected good fields in fast motion and cost accuracy).
+  double mag_consistency_th_deg = 0.0;
+  double mag_consistency_tau_s = 1.0;  ///< averaging window of that test
   // --- input handling ---
   double max_gap_s = 0.25;      ///< longer gaps integrate the gyro only over this span
   double max_gyr_rad_s = 70.0;  ///< |gyr| above this is rejected (about 4000 deg/s)
@@ -68,17 +73,21 @@ struct FilterCounters {
 struct FilterCoeffs {
   double gyr_ts_s = 0, acc_ts_s = 0, mag_ts_s = 0;
   filt::LowpassCoeffs acc_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
-  double k_mag = 0, k_mag_ref = 0;
+  double k_mag = 0, k_mag_ref = 0, k_mag_consistency = 0;
+  int bias_decim = 1;           ///< bias KF runs every bias_decim acc samples (about 100 Hz)
+  double bias_ts_s = 0;         ///< its period
+  filt::LowpassCoeffs bias_lp;  ///< tau_acc low-pass at the bias KF rate
   double bias_p0 = 0, bias_v = 0, bias_motion_w = 0, bias_vertical_w = 0, bias_rest_w = 0;
   double heading_q_rad2_s = 0, heading_r0_rad2 = 0;
 };
 
 /// Everything that evolves; can be saved and restored (plain data).
 struct FilterState {
-  Eigen::Quaterniond q_gyr = Eigen::Quaterniond::Identity();  ///< sensor -> almost-inertial
-  Eigen::Quaterniond q_acc = Eigen::Quaterniond::Identity();  ///< almost-inertial -> 6D earth
-  double delta_rad = 0;                                       ///< heading offset 6D earth -> ENU
-  double delta_var_rad2 = 10;                                 ///< heading variance (Kalman heading)
+  Eigen::Quaterniond q_gyr = Eigen::Quaterniond::Identity();    ///< sensor -> almost-inertial
+  Eigen::Quaterniond q_acc = Eigen::Quaterniond::Identity();    ///< almost-inertial -> 6D earth
+  double delta_rad = 0;                                         ///< heading offset 6D earth -> ENU
+  Eigen::Quaterniond q_delta = Eigen::Quaterniond::Identity();  ///< rotation by delta_rad
+  double delta_var_rad2 = 10;  ///< heading variance (Kalman heading)
   bool have_gyr = false, have_acc = false, have_mag = false;
   int64_t t_gyr_ns = 0, t_acc_ns = 0, t_mag_ns = 0;
   double gyr_ts_nom_s = 0, acc_ts_nom_s = 0, mag_ts_nom_s = 0;  ///< tracked sampling periods
@@ -90,6 +99,8 @@ struct FilterState {
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();
   Eigen::Matrix3d bias_p = Eigen::Matrix3d::Zero();  ///< in (0.01 deg/s)^2
   bool bias_p_init = false;
+  int bias_n = 0;                                           ///< acc samples in this block
+  Eigen::Vector2d bias_corr_sum = Eigen::Vector2d::Zero();  ///< horizontal corrections summed
   filt::Lowpass<9> motion_r_lp;
   filt::Lowpass<2> motion_bias_lp;
   // rest
@@ -106,6 +117,8 @@ struct FilterState {
   double mag_cand_norm = -1, mag_cand_dip = 0, mag_cand_t_s = 0;
   filt::Lowpass<2> mag_norm_dip_lp;
   double mag_norm_dip[2] = {0, 0};
+  double mag_err_mean_rad = 0, mag_err_var_rad2 = 0;  ///< consistency test state
+  bool mag_err_init = false;
 };
 
 /// Quaternion attitude filter for one sensor. Allocation-free update.
