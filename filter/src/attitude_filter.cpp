@@ -52,6 +52,8 @@ void AttitudeFilter::refresh_coeffs() {
   c_.mag_ts_s = st_.mag_ts_nom_s > 0 ? st_.mag_ts_nom_s : c_.acc_ts_s;
 
   c_.acc_lp = filt::butterworth(p_.tau_acc_s, c_.acc_ts_s);
+  c_.acc_fast_lp = filt::butterworth(p_.tau_acc_fast_s, c_.acc_ts_s);
+  c_.k_acc_dyn = filt::gain_from_tau(p_.acc_dyn_tau_s, c_.acc_ts_s);
   c_.rest_gyr_lp = filt::butterworth(p_.rest_filter_tau_s, c_.gyr_ts_s);
   c_.rest_acc_lp = filt::butterworth(p_.rest_filter_tau_s, c_.acc_ts_s);
   c_.mag_norm_dip_lp = filt::butterworth(p_.mag_current_tau_s, c_.mag_ts_s);
@@ -187,7 +189,18 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   // Acc into the almost-inertial frame, low-pass, then into the 6D earth frame.
   const Eigen::Vector3d acc_i = st_.q_gyr * acc;
   const auto& f = st_.acc_lp.step(acc_i.data(), c_.acc_lp, p_.tau_acc_s, ts);
-  Eigen::Vector3d acc_e = st_.q_acc * Eigen::Vector3d(f[0], f[1], f[2]);
+  Eigen::Vector3d acc_f(f[0], f[1], f[2]);
+  if (p_.tau_acc_fast_s > 0) {
+    // Linear-acceleration intensity: deviation of the specific force from the gravity estimate.
+    st_.acc_dyn_m2_s4 += c_.k_acc_dyn * ((acc_i - acc_f).squaredNorm() - st_.acc_dyn_m2_s4);
+    const auto& ff = st_.acc_fast_lp.step(acc_i.data(), c_.acc_fast_lp, p_.tau_acc_fast_s, ts);
+    st_.gyr_dyn_rad2_s2 += c_.k_acc_dyn * (st_.last_gyr_rad_s.squaredNorm() - st_.gyr_dyn_rad2_s2);
+    const double rho2 = (st_.gyr_dyn_rad2_s2 + 1e-4) / (st_.acc_dyn_m2_s4 + 1e-2);
+    const double ref2 = p_.acc_dyn_ref_rad_s_per_m_s2 * p_.acc_dyn_ref_rad_s_per_m_s2;
+    const double alpha = rho2 / (rho2 + ref2);
+    acc_f = (1.0 - alpha) * acc_f + alpha * Eigen::Vector3d(ff[0], ff[1], ff[2]);
+  }
+  Eigen::Vector3d acc_e = st_.q_acc * acc_f;
   const double an = acc_e.norm();
   if (!(an > 1e-9)) return;
   acc_e /= an;
@@ -312,17 +325,18 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
   }
 
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
-  if (p_.mag_dist_rejection && p_.mag_consistency_th_deg > 0) {
-    // Gyro-consistency: wobble of the measured heading around its short-term mean.
-    if (!st_.mag_err_init) {
-      st_.mag_err_mean_rad = err;
-      st_.mag_err_init = true;
+  if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
+    // Gyro-consistency: the field in the almost-inertial frame must stay put.
+    const Eigen::Vector3d m_i = st_.q_gyr * mag;
+    if (!st_.mag_i_init) {
+      st_.mag_i_mean = m_i;
+      st_.mag_i_init = true;
     }
-    const double dev = wrap_pi(err - st_.mag_err_mean_rad);
-    st_.mag_err_mean_rad = wrap_pi(st_.mag_err_mean_rad + c_.k_mag_consistency * dev);
-    st_.mag_err_var_rad2 += c_.k_mag_consistency * (dev * dev - st_.mag_err_var_rad2);
-    const double th = p_.mag_consistency_th_deg * kDeg;
-    if (st_.mag_err_var_rad2 > th * th) {
+    const Eigen::Vector3d dev = m_i - st_.mag_i_mean;
+    st_.mag_i_mean += c_.k_mag_consistency * dev;
+    st_.mag_i_var_rel +=
+        c_.k_mag_consistency * (dev.squaredNorm() / m_i.squaredNorm() - st_.mag_i_var_rel);
+    if (st_.mag_i_var_rel > p_.mag_consistency_th * p_.mag_consistency_th) {
       st_.mag_disturbed = true;
       st_.mag_undisturbed_t_s = 0;
     }
