@@ -108,9 +108,11 @@ bool AttitudeFilter::stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double
   else
     ++cnt_.gaps;
   // Re-derive coefficients when a tracked period moved more than 2 % from the one in use.
-  if (std::abs(st_.gyr_ts_nom_s - c_.gyr_ts_s) > 0.02 * c_.gyr_ts_s ||
-      std::abs(st_.acc_ts_nom_s - c_.acc_ts_s) > 0.02 * c_.acc_ts_s ||
-      std::abs(st_.mag_ts_nom_s - c_.mag_ts_s) > 0.02 * c_.mag_ts_s)
+  auto moved = [](double nom, double used) {
+    return nom > 0 && std::abs(nom - used) > 0.02 * used;
+  };
+  if (moved(st_.gyr_ts_nom_s, c_.gyr_ts_s) || moved(st_.acc_ts_nom_s, c_.acc_ts_s) ||
+      moved(st_.mag_ts_nom_s, c_.mag_ts_s))
     refresh_coeffs();
   return true;
 }
