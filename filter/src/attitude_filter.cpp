@@ -307,7 +307,8 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
         std::abs(dip - st_.mag_cand_dip) < dip_th) {
       // A new field replacing a known one must be seen while rotating (a static local
       // disturbance stays self-consistent at rest); the very first field needs no rotation.
-      if (st_.mag_ref_norm == 0 || st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kDeg)
+      if ((st_.mag_ref_norm == 0 && !p_.mag_first_needs_rotation) ||
+          st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kDeg)
         st_.mag_cand_t_s += ts;
       st_.mag_cand_norm += c_.k_mag_ref * (norm - st_.mag_cand_norm);
       st_.mag_cand_dip += c_.k_mag_ref * (dip - st_.mag_cand_dip);

@@ -49,6 +49,9 @@ struct FilterParams {
   double mag_new_time_s = 20.0;         ///< a new consistent field is accepted after this
   double mag_new_first_time_s = 5.0;    ///< ... or this for the first field
   double mag_new_min_gyr_deg_s = 20.0;  ///< only while rotating at least this fast
+  /// VQF accepts even the first field only while rotating; ours accepts the first field at
+  /// rest too (start-up stand-still = clean reference, full rejection budget for the session).
+  bool mag_first_needs_rotation = false;
   double mag_min_undisturbed_time_s = 0.5;
   double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
   double mag_rejection_factor = 2.0;       ///< gain divisor after that
