@@ -2,6 +2,7 @@
 // filter, rest detection and magnetic-disturbance handling. Equations in docs/filter.md.
 #include "mocap/filter/attitude_filter.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -59,6 +60,7 @@ void AttitudeFilter::refresh_coeffs() {
   c_.mag_norm_dip_lp = filt::butterworth(p_.mag_current_tau_s, c_.mag_ts_s);
   c_.k_mag = filt::gain_from_tau(p_.tau_mag_s, c_.mag_ts_s);
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
+  c_.k_hard_iron = p_.hard_iron_tau_s > 0 ? std::exp(-c_.mag_ts_s / p_.hard_iron_tau_s) : 0.0;
   c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
 
   // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
@@ -277,8 +279,41 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   st_.bias_p -= k * cm * st_.bias_p;
 }
 
-void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
+// Exponentially weighted least squares for (c, h) in R m = c + R h, R = rotation of q_gyr.
+// With W = sum w, S = sum w R, u = sum w R m, v = sum w m the normal equations reduce to
+// (W^2 I - S^T S) h = W v - S^T u.
+void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag) {
+  const double f = c_.k_hard_iron;
+  const Eigen::Matrix3d r = st_.q_gyr.toRotationMatrix();
+  st_.hi_w = f * st_.hi_w + 1.0;
+  st_.hi_s = f * st_.hi_s + r;
+  st_.hi_u = f * st_.hi_u + r * mag;
+  st_.hi_v = f * st_.hi_v + mag;
+  st_.hi_e = f * st_.hi_e + mag.squaredNorm();
+  if (++st_.hi_n < 16) return;  // solve at about 1/16 of the magnetometer rate
+  st_.hi_n = 0;
+  const double w = st_.hi_w;
+  const Eigen::Matrix3d m = w * w * Eigen::Matrix3d::Identity() - st_.hi_s.transpose() * st_.hi_s;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(m, Eigen::EigenvaluesOnly);
+  const double excitation = es.eigenvalues()(0) / (w * w);
+  if (!(excitation > p_.hard_iron_min_excitation)) return;  // keep the last estimate
+  const Eigen::Vector3d h = m.ldlt().solve(w * st_.hi_v - st_.hi_s.transpose() * st_.hi_u);
+  const Eigen::Vector3d c = (st_.hi_u - st_.hi_s * h) / w;
+  const double res = st_.hi_e + w * c.squaredNorm() + w * h.squaredNorm() - 2 * c.dot(st_.hi_u) -
+                     2 * h.dot(st_.hi_v) + 2 * c.dot(st_.hi_s * h);
+  const double rms_rel = std::sqrt(std::max(res, 0.0) / w) / std::max(c.norm(), 1e-9);
+  if (h.allFinite() && rms_rel < p_.hard_iron_max_residual) {
+    st_.hard_iron_uT = h;
+    st_.hard_iron_valid = true;
+  }
+}
+
+void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const double ts = c_.mag_ts_s;
+  if (p_.hard_iron_tau_s > 0) update_hard_iron(mag_raw);
+  const Eigen::Vector3d mag =
+      st_.hard_iron_valid ? Eigen::Vector3d(mag_raw - st_.hard_iron_uT) : mag_raw;
   const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
   const Eigen::Vector3d m_e = q6 * mag;
 

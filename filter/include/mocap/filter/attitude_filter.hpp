@@ -64,6 +64,15 @@ struct FilterParams {
   /// rotation needs magnetometer updates) than it saved; kept for experiments.
   double mag_consistency_th = 0.0;
   double mag_consistency_tau_s = 1.0;  ///< averaging window of that test
+  /// Online hard-iron estimation (a sensor-fixed field offset h, e.g. a magnet on the housing):
+  /// in the almost-inertial frame q_gyr (m - h) is constant, which is linear in (field, h);
+  /// solved by exponentially weighted least squares over hard_iron_tau_s. h is used only when
+  /// the rotation excitation (smallest eigenvalue of the normalised information matrix) exceeds
+  /// hard_iron_min_excitation and the fit residual is below hard_iron_max_residual x |field|.
+  /// hard_iron_tau_s = 0 disables.
+  double hard_iron_tau_s = 0.0;  // off: on BROAD it fitted room-field gradients as h
+  double hard_iron_min_excitation = 0.3;
+  double hard_iron_max_residual = 0.03;
   // --- input handling ---
   double max_gap_s = 0.25;      ///< longer gaps integrate the gyro only over this span
   double max_gyr_rad_s = 70.0;  ///< |gyr| above this is rejected (about 4000 deg/s)
@@ -86,6 +95,7 @@ struct FilterCoeffs {
   double gyr_ts_s = 0, acc_ts_s = 0, mag_ts_s = 0;
   filt::LowpassCoeffs acc_lp, acc_fast_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
   double k_acc_dyn = 0;
+  double k_hard_iron = 0;
   double k_mag = 0, k_mag_ref = 0, k_mag_consistency = 0;
   int bias_decim = 1;           ///< bias KF runs every bias_decim acc samples (about 100 Hz)
   double bias_ts_s = 0;         ///< its period
@@ -135,6 +145,13 @@ struct FilterState {
   Eigen::Vector3d mag_i_mean = Eigen::Vector3d::Zero();  ///< consistency test: mean of q_gyr m
   double mag_i_var_rel = 0;                              ///< and relative deviation power
   bool mag_i_init = false;
+  // hard-iron least squares: weight, sum R, sum R m, sum m, sum |m|^2; current estimate
+  double hi_w = 0, hi_e = 0;
+  Eigen::Matrix3d hi_s = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d hi_u = Eigen::Vector3d::Zero(), hi_v = Eigen::Vector3d::Zero();
+  Eigen::Vector3d hard_iron_uT = Eigen::Vector3d::Zero();
+  bool hard_iron_valid = false;
+  int hi_n = 0;
 };
 
 /// Quaternion attitude filter for one sensor. Allocation-free update.
@@ -166,6 +183,7 @@ class AttitudeFilter {
   void update_gyr(const Eigen::Vector3d& gyr, double dt_s);
   void update_acc(const Eigen::Vector3d& acc, double dt_s);
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
+  void update_hard_iron(const Eigen::Vector3d& mag);
   void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
   bool stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double& ts_nom, double& dt_s);
   void refresh_coeffs();
