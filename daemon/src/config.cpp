@@ -6,12 +6,12 @@
 #include <arpa/inet.h>
 #include <unistd.h>
 
+#include <toml++/toml.h>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "mocap/core/segments.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
@@ -28,13 +28,15 @@ std::string ConfigError::to_string() const {
 
 std::string ConfigErrors::to_string() const {
   std::string out;
-  for (const auto& e : errors) out += e.to_string() + "\n";
+  for (const auto& e : errors)
+    out += e.to_string() + "\n";
   return out;
 }
 
 int edit_distance(std::string_view a, std::string_view b) {
   std::vector<int> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = static_cast<int>(j);
+  for (size_t j = 0; j <= b.size(); ++j)
+    row[j] = static_cast<int>(j);
   for (size_t i = 1; i <= a.size(); ++i) {
     int diag = row[0];
     row[0] = static_cast<int>(i);
@@ -105,7 +107,8 @@ std::string join(const std::string& path, std::string_view key) {
 
 std::string list_of(std::initializer_list<std::string_view> names) {
   std::string out;
-  for (auto n : names) out += (out.empty() ? "" : ", ") + std::string(n);
+  for (auto n : names)
+    out += (out.empty() ? "" : ", ") + std::string(n);
   return out;
 }
 
@@ -187,8 +190,10 @@ class TableReader {
       if (std::find(known_.begin(), known_.end(), k.str()) != known_.end()) continue;
       std::string msg = "unknown key";
       auto near = nearest_name(k.str(), known_);
-      if (!near.empty()) msg += " (did you mean '" + near + "'?)";
-      else msg += " (valid keys: " + list_known() + ")";
+      if (!near.empty())
+        msg += " (did you mean '" + near + "'?)";
+      else
+        msg += " (valid keys: " + list_known() + ")";
       ctx_.add(&v, join(path_, k.str()), msg);
     }
   }
@@ -202,7 +207,8 @@ class TableReader {
   }
   std::string list_known() const {
     std::string out;
-    for (auto k : known_) out += (out.empty() ? "" : ", ") + std::string(k);
+    for (auto k : known_)
+      out += (out.empty() ? "" : ", ") + std::string(k);
     return out;
   }
 
@@ -234,8 +240,8 @@ bool valid_axis_remap(std::string_view s) {
 bool valid_sensor_name(std::string_view s) {
   if (s.empty() || s.size() > 23) return false;
   return std::all_of(s.begin(), s.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '_' || c == '-';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '-';
   });
 }
 
@@ -256,14 +262,19 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
   r.str("log_level", s.log_level, {"trace", "debug", "info", "warn", "error", "off"});
   if (const toml::table* opts = r.table("options")) {
     for (const auto& [k, v] : *opts) {
-      if (v.is_string()) s.options[std::string(k.str())] = *v.value<std::string>();
-      else if (v.is_integer()) s.options[std::string(k.str())] = std::to_string(*v.value<int64_t>());
+      if (v.is_string())
+        s.options[std::string(k.str())] = *v.value<std::string>();
+      else if (v.is_integer())
+        s.options[std::string(k.str())] = std::to_string(*v.value<int64_t>());
       else if (v.is_floating_point()) {
         std::ostringstream o;
         o << *v.value<double>();
         s.options[std::string(k.str())] = o.str();
-      } else if (v.is_boolean()) s.options[std::string(k.str())] = *v.value<bool>() ? "true" : "false";
-      else ctx.add(&v, r.path() + ".options." + std::string(k.str()), "expected a string, number or boolean");
+      } else if (v.is_boolean())
+        s.options[std::string(k.str())] = *v.value<bool>() ? "true" : "false";
+      else
+        ctx.add(&v, r.path() + ".options." + std::string(k.str()),
+                "expected a string, number or boolean");
     }
   }
   r.finish();
@@ -279,8 +290,7 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
   const bool has_ids = s.vid >= 0 || s.pid >= 0;
   if (has_ids && (s.vid < 0 || s.pid < 0))
     ctx.add(at(s.vid < 0 ? "pid" : "vid"), p, "vid and pid go together");
-  if (s.port.empty() && !has_ids)
-    ctx.add(where, p, "needs either port or vid and pid");
+  if (s.port.empty() && !has_ids) ctx.add(where, p, "needs either port or vid and pid");
   if (!s.port.empty() && has_ids)
     ctx.add(at("port"), p + ".port", "give either port or vid/pid, not both");
   if (!s.segment.empty() && !segment_from_name(s.segment)) {
@@ -401,7 +411,8 @@ Config read_root(const toml::table& root, Ctx& ctx) {
         read_sensor(*el.as_table(), &el, i, ctx, s);
         const std::string p = "sensor[" + std::to_string(i) + "]";
         if (!s.name.empty() && !names.insert(s.name).second)
-          ctx.add(el.as_table()->get("name"), p + ".name", "duplicate sensor name '" + s.name + "'");
+          ctx.add(el.as_table()->get("name"), p + ".name",
+                  "duplicate sensor name '" + s.name + "'");
         if (!s.segment.empty() && !segments.insert(s.segment).second)
           ctx.add(el.as_table()->get("segment"), p + ".segment",
                   "segment '" + s.segment + "' already has a sensor");
@@ -465,7 +476,8 @@ void apply_override(toml::table& root, const std::string& kv, Ctx& ctx) {
     try {
       parsed = toml::parse("v = " + toml_quote(value), src);
     } catch (const toml::parse_error& e) {
-      return ctx.add(nullptr, key, std::string("--set: bad value: ") + std::string(e.description()));
+      return ctx.add(nullptr, key,
+                     std::string("--set: bad value: ") + std::string(e.description()));
     }
   }
   toml::table* t = &root;
@@ -518,7 +530,8 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
     errors.errors.push_back(std::move(err));
     return std::nullopt;
   }
-  for (const auto& kv : overrides) apply_override(root, kv, ctx);
+  for (const auto& kv : overrides)
+    apply_override(root, kv, ctx);
   if (!errors.errors.empty()) return std::nullopt;
   Config c = read_root(root, ctx);
   c.source = std::string(source_name);
@@ -580,8 +593,8 @@ std::string config_to_toml(const Config& c) {
                                   {"seed", static_cast<int64_t>(c.demo.seed)}});
   toml::array sensors;
   for (const auto& s : c.sensors) {
-    toml::table t{{"name", s.name},         {"driver", s.driver},     {"baud", s.baud},
-                  {"rate_hz", s.rate_hz},   {"segment", s.segment},   {"axis_remap", s.axis_remap},
+    toml::table t{{"name", s.name},          {"driver", s.driver},   {"baud", s.baud},
+                  {"rate_hz", s.rate_hz},    {"segment", s.segment}, {"axis_remap", s.axis_remap},
                   {"log_level", s.log_level}};
     if (!s.port.empty()) t.insert("port", s.port);
     if (s.vid >= 0) {
@@ -591,7 +604,8 @@ std::string config_to_toml(const Config& c) {
       if (!s.serial.empty()) t.insert("serial", s.serial);
     }
     toml::table opts;
-    for (const auto& [k, v] : s.options) opts.insert(k, v);
+    for (const auto& [k, v] : s.options)
+      opts.insert(k, v);
     t.insert("options", std::move(opts));
     sensors.push_back(std::move(t));
   }

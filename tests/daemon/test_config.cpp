@@ -75,9 +75,10 @@ TEST(Config, UnknownKeySuggestsNearestWithPosition) {
 
 TEST(Config, UnknownSectionAndSegmentSuggestions) {
   ConfigErrors errs;
-  auto c = parse("[outptus]\n[[sensor]]\nname=\"a\"\ndriver=\"line\"\nport=\"/dev/x\"\n"
-                 "segment=\"thigh_left\"\n",
-                 errs);
+  auto c = parse(
+      "[outptus]\n[[sensor]]\nname=\"a\"\ndriver=\"line\"\nport=\"/dev/x\"\n"
+      "segment=\"thigh_left\"\n",
+      errs);
   ASSERT_FALSE(c);
   ASSERT_EQ(errs.errors.size(), 2u) << errs.to_string();
   std::string all = errs.to_string();
@@ -88,9 +89,10 @@ TEST(Config, UnknownSectionAndSegmentSuggestions) {
 
 TEST(Config, RangeAndTypeChecks) {
   ConfigErrors errs;
-  auto c = parse("[pipeline]\nrate_hz = 0\nstale_after_ms = \"x\"\n[outputs.json]\nport = 70000\n"
-                 "bind = \"localhost:1\"\n",
-                 errs);
+  auto c = parse(
+      "[pipeline]\nrate_hz = 0\nstale_after_ms = \"x\"\n[outputs.json]\nport = 70000\n"
+      "bind = \"localhost:1\"\n",
+      errs);
   ASSERT_FALSE(c);
   std::string all = errs.to_string();
   EXPECT_EQ(errs.errors.size(), 4u) << all;

@@ -15,15 +15,15 @@ namespace mocap::daemon {
 
 /// One sensor of the rig (one device carrying one IMU).
 struct SensorConfig {
-  std::string name;              ///< unique in the rig; shown in status and streams
-  std::string driver;            ///< protocol ("witmotion", "xbus", "ds4", "line", ...)
-  std::string port;              ///< serial path, "udp:HOST:PORT", or empty when vid/pid given
-  int vid = -1, pid = -1;        ///< USB ids (then port becomes "usb:VID:PID[:SERIAL]")
-  std::string serial;            ///< USB serial number to pick one of several identical devices
-  bool hid = false;              ///< the device is a HID device ("hid:VID:PID")
-  int baud = 0;                  ///< 0 = the protocol's default
-  double rate_hz = 0;            ///< requested device output rate (0 = device default)
-  std::string segment;           ///< body segment it drives ("" = not attached)
+  std::string name;        ///< unique in the rig; shown in status and streams
+  std::string driver;      ///< protocol ("witmotion", "xbus", "ds4", "line", ...)
+  std::string port;        ///< serial path, "udp:HOST:PORT", or empty when vid/pid given
+  int vid = -1, pid = -1;  ///< USB ids (then port becomes "usb:VID:PID[:SERIAL]")
+  std::string serial;      ///< USB serial number to pick one of several identical devices
+  bool hid = false;        ///< the device is a HID device ("hid:VID:PID")
+  int baud = 0;            ///< 0 = the protocol's default
+  double rate_hz = 0;      ///< requested device output rate (0 = device default)
+  std::string segment;     ///< body segment it drives ("" = not attached)
   std::string axis_remap = "x,y,z";
   std::string log_level = "info";
   std::map<std::string, std::string> options;  ///< protocol options
@@ -31,12 +31,12 @@ struct SensorConfig {
 
 /// Attitude filter parameters (mapped onto the filter module's FilterParams).
 struct FilterConfig {
-  double acc_gain = 0.02;           ///< accelerometer correction gain (1/s)
-  double mag_gain = 0.01;           ///< magnetometer correction gain (1/s)
-  double bias_gain = 0.001;         ///< gyro bias learning gain (1/s)
-  bool use_mag = true;              ///< use magnetometers for heading when present
-  double mag_reject_deg = 10.0;     ///< dip-angle deviation rejected as a disturbance
-  double rest_gyr_dps = 1.5;        ///< gyro norm below which a sensor may be at rest
+  double acc_gain = 0.02;        ///< accelerometer correction gain (1/s)
+  double mag_gain = 0.01;        ///< magnetometer correction gain (1/s)
+  double bias_gain = 0.001;      ///< gyro bias learning gain (1/s)
+  bool use_mag = true;           ///< use magnetometers for heading when present
+  double mag_reject_deg = 10.0;  ///< dip-angle deviation rejected as a disturbance
+  double rest_gyr_dps = 1.5;     ///< gyro norm below which a sensor may be at rest
 };
 
 struct BodyConfig {
@@ -46,10 +46,10 @@ struct BodyConfig {
 };
 
 struct CalibrationConfig {
-  std::string pose = "npose";   ///< "npose" or "tpose"
-  double countdown_s = 3.0;     ///< seconds from the command to the capture
-  double capture_s = 1.0;       ///< seconds averaged during the capture
-  std::string file;             ///< saved calibration loaded at start, written after each one
+  std::string pose = "npose";  ///< "npose" or "tpose"
+  double countdown_s = 3.0;    ///< seconds from the command to the capture
+  double capture_s = 1.0;      ///< seconds averaged during the capture
+  std::string file;            ///< saved calibration loaded at start, written after each one
 };
 
 struct PipelineConfig {
@@ -95,7 +95,7 @@ struct DaemonSection {
 };
 
 struct DemoConfig {
-  std::string path = "device";  ///< "device" (simulated devices via ptys) or "direct"
+  std::string path = "device";         ///< "device" (simulated devices via ptys) or "direct"
   std::string protocol = "witmotion";  ///< wire protocol the simulated devices speak
   double rate_hz = 100.0;
   std::string motion = "walk";
@@ -134,8 +134,7 @@ struct ConfigErrors {
 /// applied before validation; VALUE is a TOML value, or a bare string. Returns the config or
 /// fills `errors` (never a partial config).
 std::optional<Config> parse_config(std::string_view toml_text, std::string_view source_name,
-                                   const std::vector<std::string>& overrides,
-                                   ConfigErrors& errors);
+                                   const std::vector<std::string>& overrides, ConfigErrors& errors);
 /// Reads the file, then parse_config.
 std::optional<Config> load_config(const std::string& path,
                                   const std::vector<std::string>& overrides, ConfigErrors& errors);
