@@ -118,7 +118,11 @@ SensorMount make_mount(Segment seg, const BodyDimensions& dims, const SensorMode
   std::uniform_real_distribution<double> roll(-std::numbers::pi, std::numbers::pi);
   std::normal_distribution<double> tilt(0.0, p.mount_misalignment_deg * kDeg);
   const double roll_rad = roll(rng);  // drawn always so the stream does not depend on flags
-  if (p.random_mount_roll) q = q * Eigen::AngleAxisd(roll_rad, V::UnitZ());
+  // The pelvis sensor sits on a belt clip with a fixed roll (its x axis up), so its -z axis points
+  // forward: the calibration's heading reference. Other straps have any roll.
+  // (FromTwoVectors already turns the sensor's x up for the -x normal.)
+  if (seg != Segment::pelvis && p.random_mount_roll)
+    q = q * Eigen::AngleAxisd(roll_rad, V::UnitZ());
   const V mis(tilt(rng), tilt(rng), tilt(rng));
   if (mis.norm() > 0) q = q * Eigen::AngleAxisd(mis.norm(), mis.normalized());
   return {seg, r, q.normalized()};

@@ -114,6 +114,27 @@ TEST(SensorModel, OffAxisMountSeesCentripetalAcceleration) {
   EXPECT_GT(k.a_earth_m_s2.norm(), 0.3 * w * w);
 }
 
+TEST(SensorModel, PelvisBeltMountLooksForwardAlongMinusZ) {
+  SensorModelParams p;
+  p.mount_misalignment_deg = 0;
+  std::mt19937_64 rng(3);
+  const auto dims = body_dimensions_from_height(1.75);
+  const SensorMount m = make_mount(Segment::pelvis, dims, p, rng);
+  const Eigen::Vector3d fwd = m.q_segment_sensor * pelvis_forward_axis_sensor();
+  EXPECT_LT((fwd - Eigen::Vector3d::UnitX()).norm(), 1e-12);
+  EXPECT_LT((m.q_segment_sensor * Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitZ()).norm(),
+            1e-12);
+  // Other segments get random strap rolls: two seeds give different mounts.
+  std::mt19937_64 r1(1), r2(2);
+  const SensorMount a = make_mount(Segment::thigh_l, dims, p, r1);
+  const SensorMount b = make_mount(Segment::thigh_l, dims, p, r2);
+  EXPECT_GT(a.q_segment_sensor.angularDistance(b.q_segment_sensor), 1e-3);
+  EXPECT_LT((a.q_segment_sensor * Eigen::Vector3d::UnitZ() -
+             b.q_segment_sensor * Eigen::Vector3d::UnitZ())
+                .norm(),
+            1e-12);  // same normal
+}
+
 TEST(MagneticField, DipoleDecaysWithDistanceAndPresetsAreNamed) {
   MagneticFieldParams f;
   f.dipoles = disturbance_preset("magnet", 1.75);

@@ -74,6 +74,12 @@ struct SensorMount {
   Eigen::Quaterniond q_segment_sensor = Eigen::Quaterniond::Identity();
 };
 
+/// Body forward (+x) in the pelvis sensor's frame for the nominal belt mount (before
+/// misalignment): what a calibration takes as its heading axis.
+inline Eigen::Vector3d pelvis_forward_axis_sensor() {
+  return -Eigen::Vector3d::UnitZ();
+}
+
 /// The nominal surface point and outward normal (segment frame) where a sensor goes on each
 /// segment, scaled to the body; then strap roll and misalignment drawn from `rng`.
 SensorMount make_mount(Segment s, const BodyDimensions& dims, const SensorModelParams& p,
