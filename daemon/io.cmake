@@ -5,3 +5,8 @@ target_sources(mocap_daemon PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/pose_json.cpp
 )
 target_link_libraries(mocap_daemon PUBLIC ZLIB::ZLIB Threads::Threads)
+target_sources(mocap_daemon PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/src/session.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/session_writer.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/session_reader.cpp
+)
