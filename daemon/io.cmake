@@ -10,3 +10,7 @@ target_sources(mocap_daemon PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/session_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/session_reader.cpp
 )
+target_sources(mocap_daemon PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/src/osc.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/vmc.cpp
+)
