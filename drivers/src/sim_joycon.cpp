@@ -83,6 +83,9 @@ class JoyconEncoder final : public ProtocolEncoder {
     reply.insert(reply.end(), r.begin(), r.end());
   }
 
+  void unsolicited(std::vector<uint8_t>& out) override {
+    handle_host_bytes(spi_read(0, kSpiImuFactoryCalib, kImuCalibSize), out);
+  }
   bool streaming() const override { return mode_ == 0x30; }
   double rate_hz() const override { return rate_; }
   std::size_t report_size() const override { return kReportSize; }

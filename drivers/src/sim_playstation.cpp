@@ -75,6 +75,9 @@ class PlaystationEncoder final : public ProtocolEncoder {
     return true;
   }
 
+  void unsolicited(std::vector<uint8_t>& out) override {
+    feature_report(model_ == Model::kDs4 ? kDs4CalibUsb : kCalibBt, out);
+  }
   double rate_hz() const override { return rate_; }
   std::size_t report_size() const override { return kInputSize; }
 

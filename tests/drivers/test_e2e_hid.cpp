@@ -2,7 +2,11 @@
 // read, Joy-Con handshake and subcommands; reader thread; decoder) runs on a simulated HID
 // transport whose reports come from the protocol encoder, and the decoded samples are checked
 // against the simulated truth. Report-level tests cover drops and timestamp rollover.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include "collect_sink.hpp"
 #include "mocap/drivers/joycon.hpp"
@@ -134,4 +138,37 @@ TEST(JoyconReports, CalibrationFormulasAndZeroDivisor) {
   EXPECT_NEAR(joycon::gyr_dps(c, 1, 14247), 1000.0, 1e-9);
   c.gyr_sens[2] = c.gyr_offset[2] = 7;  // divisor 0 -> 1, no crash
   EXPECT_TRUE(std::isfinite(joycon::gyr_dps(c, 2, 100)));
+}
+
+TEST(E2eHid, ControllersOverUdpDatagrams) {
+  // A controller bridged over UDP (one report per datagram, calibration repeated unsolicited):
+  // the same decoder through the real UDP transport.
+  for (const char* proto : {"ds4", "joycon"}) {
+    int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+    socklen_t len = sizeof a;
+    ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+    ::close(fd);
+    const std::string addr = "127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+    DeviceSpec spec{.name = proto,
+                    .protocol = proto,
+                    .port = "udp:" + addr,
+                    .options = {{"usb_handshake", "0"}}};
+    auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::error));
+    test::CollectSink sink;
+    dev->start(sink);
+    SimulatedDevice sim({.protocol = proto, .rate_hz = 200, .motion = "rotate", .udp = addr});
+    sim.start();
+    ASSERT_TRUE(sink.wait_for([&] { return sink.count() >= 150; })) << proto;
+    sim.stop();
+    dev->stop();
+    double eg = 0;
+    for (const auto& s : sink.snapshot())
+      eg = std::max(eg,
+                    (s.gyr_rad_s - sim.motion().at(s.t_device_ns).gyr_rad_s).cwiseAbs().maxCoeff());
+    EXPECT_LT(eg, 0.0013) << proto;
+  }
 }
