@@ -68,6 +68,7 @@ bool StreamDevice::try_open(SampleSink& sink) {
   last_data_ns_ = monotonic_ns();
   sink.on_connection(spec_.device_index, true, "opened " + transport_->describe());
   step_ = 0;
+  attempts_ = 0;
   if (!setup_.empty()) begin_step(sink);
   return true;
 }
