@@ -99,6 +99,9 @@ void StreamDevice::begin_step(SampleSink& sink) {
   if (s.kind == SetupStep::kWrite) {
     if (!transport_->write(s.bytes, err))
       log_.warn("%s: %s: %s", spec_.name.c_str(), s.what, err.c_str());
+  } else if (s.kind == SetupStep::kSetBaud) {
+    if (!transport_->set_baud(s.baud, err))
+      log_.warn("%s: %s: %s", spec_.name.c_str(), s.what, err.c_str());
   } else if (s.kind == SetupStep::kGetFeature) {
     std::array<uint8_t, 256> buf{};
     buf[0] = s.bytes.at(0);

@@ -111,7 +111,12 @@ TEST(E2eSerial, WitmotionOverPtyIsConfiguredByTheDriver) {
                 .corrupt_every = 50};
   SimulatedDevice sim(so);
   sim.start();
-  DeviceSpec spec{.name = "wt0", .protocol = "witmotion", .port = sim.path(), .rate_hz = 100};
+  // device_baud exercises the baud change: device command, host follows (termios on the pty).
+  DeviceSpec spec{.name = "wt0",
+                  .protocol = "witmotion",
+                  .port = sim.path(),
+                  .rate_hz = 100,
+                  .options = {{"device_baud", "115200"}}};
   auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
   test::CollectSink sink;
   dev->start(sink);
