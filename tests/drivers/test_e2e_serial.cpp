@@ -185,6 +185,7 @@ TEST(E2eSerial, LineOverUdp) {
   auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
   test::CollectSink sink;
   dev->start(sink);
+  ASSERT_TRUE(sink.wait_for([&] { return !sink.events_snapshot().empty(); }));  // bound
   SimOptions so{.protocol = "line", .rate_hz = 200, .motion = "rotate", .udp = addr};
   SimulatedDevice sim(so);
   sim.start();
