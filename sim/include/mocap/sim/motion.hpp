@@ -53,8 +53,12 @@ class MotionTrack {
  private:
   void local_pose(double t_s, BodyPose& out) const;  // within one period, root from the table
   Eigen::Vector3d root_velocity(double t_s) const;   // horizontal, from the planted feet
-  void planted_root(const BodyPose& orientations, double& z_m, Eigen::Vector3d& rel_l,
-                    Eigen::Vector3d& rel_r, double& w_r) const;
+  struct Contacts {
+    Eigen::Vector3d p[4];  // heel_l, toe_l, heel_r, toe_r relative to the pelvis, earth axes
+    double w[4];           // share of the weight on each
+    double z_m;            // pelvis height that puts the weighted contact on the floor
+  };
+  void contacts(const BodyPose& orientations, Contacts& out) const;
 
   std::shared_ptr<const Motion> motion_;
   BodyDimensions dims_;
