@@ -1,0 +1,164 @@
+// The daemon configuration: one TOML file (sensors, filter, body, calibration, outputs,
+// recording) loaded into plain structs. Loading validates everything up front and reports every
+// problem as "file:line:column: key: message", so the daemon never starts half-configured.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "mocap/core/log.hpp"
+
+namespace mocap::daemon {
+
+/// One sensor of the rig (one device carrying one IMU).
+struct SensorConfig {
+  std::string name;        ///< unique in the rig; shown in status and streams
+  std::string driver;      ///< protocol ("witmotion", "xbus", "ds4", "line", ...)
+  std::string port;        ///< serial path, "udp:HOST:PORT", or empty when vid/pid given
+  int vid = -1, pid = -1;  ///< USB ids (then port becomes "usb:VID:PID[:SERIAL]")
+  std::string serial;      ///< USB serial number to pick one of several identical devices
+  bool hid = false;        ///< the device is a HID device ("hid:VID:PID")
+  int baud = 0;            ///< 0 = the protocol's default
+  double rate_hz = 0;      ///< requested device output rate (0 = device default)
+  std::string segment;     ///< body segment it drives ("" = not attached)
+  std::string axis_remap = "x,y,z";
+  std::string log_level = "info";
+  std::map<std::string, std::string> options;  ///< protocol options
+};
+
+/// Attitude filter settings: use_mag, plus any parameter of the filter module's FilterParams
+/// by name (e.g. tau_mag_s = 12), kept as text and applied with set_filter_param.
+struct FilterConfig {
+  bool use_mag = true;  ///< 9-D (magnetometer heading) or 6-D orientation
+  std::map<std::string, std::string> params;
+};
+
+struct BodyConfig {
+  double height_m = 1.75;
+  bool enforce_limits = true;  ///< clamp joints to their limits
+  bool root_motion = true;     ///< stance-foot root translation
+};
+
+struct CalibrationConfig {
+  std::string pose = "npose";  ///< "npose" or "tpose"
+  double countdown_s = 3.0;    ///< seconds from the command to the capture
+  double capture_s = 1.0;      ///< seconds averaged during the capture
+  std::string file;            ///< saved calibration loaded at start, written after each one
+};
+
+struct PipelineConfig {
+  double rate_hz = 120.0;             ///< pose frame rate
+  bool publish_every_sample = false;  ///< also publish a frame on every sample (low latency)
+  double stale_after_ms = 250.0;      ///< a sensor silent this long degrades its segment
+};
+
+struct JsonOutputConfig {
+  bool enabled = true;
+  std::string bind = "127.0.0.1";
+  int port = 7301;
+};
+
+struct VmcOutputConfig {
+  bool enabled = false;
+  std::string host = "127.0.0.1";
+  int port = 39539;
+};
+
+struct PostureOutputConfig {
+  bool enabled = true;
+  std::string shm_name;  ///< "" = "/mocap-posture-<uid>"
+};
+
+struct OutputsConfig {
+  JsonOutputConfig json;
+  VmcOutputConfig vmc;
+  PostureOutputConfig posture;
+};
+
+struct RecordingConfig {
+  std::string directory = ".";  ///< where relative file names of `record start` go
+  bool raw = true;              ///< store raw device bytes (bit-exact replay through drivers)
+  bool samples = true;          ///< store decoded samples
+  bool poses = true;            ///< store published pose frames
+  std::string auto_start;       ///< file to start recording into at startup ("" = none)
+};
+
+struct DaemonSection {
+  std::string log_level = "info";
+  std::string control_socket;  ///< "" = "$XDG_RUNTIME_DIR/mocapd.sock"
+};
+
+struct DemoConfig {
+  std::string path = "device";         ///< "device" (simulated devices via ptys) or "direct"
+  std::string protocol = "witmotion";  ///< wire protocol the simulated devices speak
+  double rate_hz = 100.0;
+  std::string motion = "walk";
+  uint64_t seed = 1;
+};
+
+struct Config {
+  std::string source;  ///< file it came from ("" for defaults)
+  DaemonSection daemon;
+  PipelineConfig pipeline;
+  FilterConfig filter;
+  BodyConfig body;
+  CalibrationConfig calibration;
+  OutputsConfig outputs;
+  RecordingConfig recording;
+  DemoConfig demo;
+  std::vector<SensorConfig> sensors;
+};
+
+/// A problem found while loading: where, which key, what.
+struct ConfigError {
+  std::string file;
+  int line = 0, column = 0;  ///< 1-based; 0 when unknown
+  std::string key;           ///< dotted path, e.g. "sensor[2].segment"
+  std::string message;
+  std::string to_string() const;
+};
+
+/// Thrown by load_config when the configuration is not valid; holds every problem found.
+struct ConfigErrors {
+  std::vector<ConfigError> errors;
+  std::string to_string() const;  ///< one line per error
+};
+
+/// Checks that need other modules (drivers, filter); each returns "" or a message. The loader
+/// reports a message at the offending key's position.
+struct ConfigValidators {
+  std::function<std::string(const SensorConfig&)> sensor;  ///< e.g. unknown driver or option
+  std::function<std::string(const std::string& name, const std::string& value)> filter_param;
+  std::vector<std::string> filter_param_names;  ///< for "did you mean" suggestions
+};
+/// The real checks: drivers' make_decoder and the filter's parameter names.
+const ConfigValidators& default_validators();
+
+/// Parses and validates TOML text. `overrides` are "key.path=VALUE" strings (from --set),
+/// applied before validation; VALUE is a TOML value, or a bare string. Returns the config or
+/// fills `errors` (never a partial config).
+std::optional<Config> parse_config(std::string_view toml_text, std::string_view source_name,
+                                   const std::vector<std::string>& overrides, ConfigErrors& errors,
+                                   const ConfigValidators* validators = nullptr);
+/// Reads the file, then parse_config.
+std::optional<Config> load_config(const std::string& path,
+                                  const std::vector<std::string>& overrides, ConfigErrors& errors,
+                                  const ConfigValidators* validators = nullptr);
+/// The effective configuration (defaults included) as TOML text that parse_config accepts.
+std::string config_to_toml(const Config& c);
+
+/// Levenshtein distance (for "did you mean" suggestions).
+int edit_distance(std::string_view a, std::string_view b);
+/// The candidate nearest to `word`, or "" if none is plausibly meant.
+std::string nearest_name(std::string_view word, const std::vector<std::string_view>& candidates);
+
+/// Log level of a name validated by the loader.
+LogLevel log_level_of(std::string_view name);
+/// "$XDG_RUNTIME_DIR/mocapd.sock" (or /tmp/mocapd-<uid>.sock without XDG_RUNTIME_DIR).
+std::string default_control_socket();
+
+}  // namespace mocap::daemon

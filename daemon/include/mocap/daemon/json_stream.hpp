@@ -1,0 +1,98 @@
+// The pose JSON stream: every PoseFrame as one line of JSON over TCP to any number of clients
+// (schema in docs/streaming.md). publish() is called from the pipeline thread: it formats once
+// into a preallocated slot and hands it to an I/O thread that serves non-blocking sockets under
+// poll(); slow clients skip frames, the pipeline never blocks.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "mocap/core/wakeup.hpp"
+#include "mocap/skeleton/pose_frame.hpp"
+
+namespace mocap::daemon {
+
+/// Longest line format_pose_json() can produce (a full rig of 32 sensors fits with room).
+inline constexpr std::size_t kPoseJsonMaxLine = 16 * 1024;
+/// Schema version written as "v" in every line.
+inline constexpr int kPoseJsonVersion = 1;
+
+/// Formats one frame as a JSON line ending in '\n' into out[0..capacity). Returns the number of
+/// bytes written, or 0 if it does not fit. Allocates nothing. Non-finite numbers become null.
+std::size_t format_pose_json(const PoseFrame& frame, char* out, std::size_t capacity) noexcept;
+
+class PoseJsonServer {
+ public:
+  struct Options {
+    std::string bind_address = "127.0.0.1";        ///< IPv4 address to listen on (loopback default)
+    uint16_t port = 0;                             ///< 0 = pick a free port (see port())
+    int max_clients = 32;                          ///< further connections are closed at once
+    std::size_t client_buffer_bytes = 256 * 1024;  ///< per-client queue of whole lines
+    std::size_t max_client_input_bytes = 4096;     ///< a client sending more is dropped
+  };
+  struct Stats {
+    uint64_t frames_published = 0;   ///< frames handed to the I/O thread
+    uint64_t frames_dropped = 0;     ///< publish() found the hand-off full (I/O thread behind)
+    uint64_t frames_skipped = 0;     ///< frame-to-client deliveries skipped (client buffer full)
+    uint64_t clients_connected = 0;  ///< currently connected
+    uint64_t clients_accepted = 0;   ///< ever accepted and served
+    uint64_t clients_rejected = 0;   ///< closed at once because max_clients were connected
+    uint64_t clients_dropped = 0;    ///< disconnected for sending too much input
+    uint64_t bytes_sent = 0;
+  };
+
+  PoseJsonServer();
+  ~PoseJsonServer();
+  PoseJsonServer(const PoseJsonServer&) = delete;
+  PoseJsonServer& operator=(const PoseJsonServer&) = delete;
+
+  /// Binds, listens and starts the I/O thread. On failure returns false with a message
+  /// naming the address and the system error.
+  bool start(const Options& options, std::string* error);
+  /// The TCP port actually listened on (after start()).
+  uint16_t port() const { return port_; }
+  /// Pipeline thread (single producer): formats the frame and hands it over. Never blocks,
+  /// never allocates. Returns false if the frame was dropped (hand-off full or not started).
+  bool publish(const PoseFrame& frame) noexcept;
+  Stats stats() const;
+  /// Stops the I/O thread and closes every socket (also done by the destructor).
+  void stop();
+
+ private:
+  struct Slot {
+    std::size_t len = 0;
+    char data[kPoseJsonMaxLine];
+  };
+  static constexpr std::size_t kSlots = 8;
+  struct Client;
+  struct Counters {
+    std::atomic<uint64_t> published{0}, dropped{0}, skipped{0}, connected{0}, accepted{0},
+        rejected{0}, abusive{0}, bytes_sent{0};
+  };
+
+  void run();
+  void deliver(const Slot& slot);
+  bool flush(Client& c);
+  void accept_clients();
+  void remove_client(std::size_t i);
+
+  Options options_;
+  int listen_fd_ = -1;
+  uint16_t port_ = 0;
+  std::unique_ptr<Slot[]> slots_;
+  alignas(64) std::atomic<uint64_t> head_{0};
+  alignas(64) std::atomic<uint64_t> tail_{0};
+  std::atomic<bool> stop_{false};
+  Wakeup wakeup_;
+  std::thread thread_;
+  std::unique_ptr<std::unique_ptr<Client>[]> clients_;
+  std::size_t client_count_ = 0;
+  std::unique_ptr<char[]> scratch_;
+  Counters counters_;
+};
+
+}  // namespace mocap::daemon

@@ -1,0 +1,108 @@
+// The single-threaded heart of the pipeline: sample -> engine, per-sensor health, calibration
+// countdown and frame building/publishing. No clocks, no threads: the live Pipeline calls it
+// with wall-clock times, replay with recorded times, so replay is deterministic.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mocap/daemon/config.hpp"
+#include "mocap/daemon/pose_engine.hpp"
+#include "mocap/skeleton/pose_frame.hpp"
+
+namespace mocap::daemon {
+
+/// Receives published pose frames (posture shm, stream servers, recorder). Called on the
+/// pipeline thread: must not block.
+class FrameSink {
+ public:
+  virtual ~FrameSink() = default;
+  virtual void publish(const PoseFrame& frame) = 0;
+};
+
+/// A FrameSink over anything with `publish(const PoseFrame&)` (PostureWriter, JSON, VMC).
+template <typename T>
+class FrameSinkAdapter final : public FrameSink {
+ public:
+  explicit FrameSinkAdapter(T& target) : target_(target) {}
+  void publish(const PoseFrame& frame) override { target_.publish(frame); }
+
+ private:
+  T& target_;
+};
+
+/// Static description of one rig sensor.
+struct SensorInfo {
+  std::string name;
+  int segment = -1;  ///< Segment index or -1
+};
+
+/// Sensor connection states (SensorStatus::state).
+enum SensorState : uint8_t { kAbsent = 0, kConnecting = 1, kStreaming = 2, kStale = 3, kError = 4 };
+
+class PipelineCore {
+ public:
+  PipelineCore(const PipelineConfig& cfg, const CalibrationConfig& calib,
+               std::vector<SensorInfo> sensors, PoseEngine& engine);
+
+  void add_sink(FrameSink* sink) { sinks_.push_back(sink); }
+  void remove_sink(FrameSink* sink);
+
+  /// One sample (sensor_id indexes the rig). Publishes a frame too in per-sample mode.
+  void process(const ImuSample& s);
+  /// Builds and publishes a frame "now" (t_now_ns: ages and countdowns are relative to it).
+  void publish_frame(int64_t t_now_ns);
+  /// Sample-time frame clock (replay): publishes the frames due before time t_ns, one per
+  /// period, so a replay produces the same frames as the rate it was recorded at.
+  void advance_clock_to(int64_t t_ns);
+
+  /// Starts a calibration: capture after the configured countdown (measured from t_now_ns).
+  void request_calibration(CalibrationPose pose, int64_t t_now_ns);
+  void reset_heading() { engine_.reset_heading(); }
+  /// Frame-level flags the pipeline does not own (recording, replay, demo).
+  void set_frame_flag(uint32_t flag, bool on);
+
+  /// Counters from outside the pipeline thread's view (device decoders, ring overflows).
+  void set_external_counters(int sensor, uint32_t drops, uint32_t errors);
+  void set_connected(int sensor, bool connected);
+
+  const PoseFrame& last_frame() const { return frame_; }
+  const std::vector<SensorInfo>& sensors() const { return sensors_; }
+  SensorFilterState filter_state(int sensor) const { return engine_.sensor_state(sensor); }
+  uint64_t samples_processed() const { return samples_; }
+  uint64_t rejected_samples() const { return rejected_; }
+  int64_t newest_sample_ns() const { return newest_t_ns_; }
+
+ private:
+  struct Health {
+    int64_t last_t_ns = INT64_MIN;
+    int64_t window_start_ns = INT64_MIN;
+    uint32_t window_count = 0;
+    float rate_hz = 0;
+    uint32_t drops = 0, errors = 0;  // external counters
+    uint32_t gaps = 0;               // samples flagged kFlagGapBefore
+    bool connected = false;
+    bool live = false;
+  };
+  void maybe_finish_calibration(int64_t t_now_ns);
+
+  PipelineConfig cfg_;
+  CalibrationConfig calib_;
+  std::vector<SensorInfo> sensors_;
+  PoseEngine& engine_;
+  std::vector<FrameSink*> sinks_;
+  std::vector<Health> health_;
+  PoseFrame frame_;
+  uint64_t frame_no_ = 0, samples_ = 0, rejected_ = 0;
+  int64_t newest_t_ns_ = 0;
+  int64_t period_ns_;
+  int64_t next_frame_ns_ = INT64_MIN;
+  uint32_t extra_flags_ = 0;
+  bool calibrating_ = false;
+  CalibrationPose calib_pose_ = CalibrationPose::npose;
+  int64_t calib_at_ns_ = 0;
+};
+
+}  // namespace mocap::daemon

@@ -1,0 +1,43 @@
+// The per-sample processing the pipeline drives, behind a small interface: per-sensor attitude
+// filters, sensor-to-segment calibration and the skeleton solver. The pipeline owns threads,
+// timing, health and outputs; an engine owns the math. RigEngine (rig_engine.hpp) is the real
+// one (filter + skeleton); tests may plug in their own.
+#pragma once
+
+#include <cstdint>
+
+#include "mocap/core/imu_sample.hpp"
+#include "mocap/skeleton/pose_frame.hpp"
+
+namespace mocap::daemon {
+
+enum class CalibrationPose { npose, tpose };
+
+/// What an engine knows about one sensor's filter (for health reports).
+struct SensorFilterState {
+  bool initialised = false;  ///< the filter has an orientation
+  bool at_rest = false;
+  bool mag_disturbed = false;
+  bool calibrated = false;     ///< a sensor-to-segment calibration is applied
+  double gyro_bias_rad_s = 0;  ///< norm of the bias estimate
+  double heading_sigma_rad = 0;
+};
+
+class PoseEngine {
+ public:
+  virtual ~PoseEngine() = default;
+  /// One sample of sensor `sensor_index` (index in the rig). Must not allocate.
+  virtual void on_sample(int sensor_index, const ImuSample& sample) = 0;
+  /// A sensor became silent (live = false) or came back; its segment is then inferred.
+  virtual void set_sensor_live(int sensor_index, bool live) = 0;
+  /// Fills the pose part of `out` (segment orientations, positions, joints, violations,
+  /// segment_flags, kFrameCalibrated) from the current state. Must not allocate.
+  virtual void build_frame(int64_t t_ns, PoseFrame& out) = 0;
+  virtual SensorFilterState sensor_state(int sensor_index) const = 0;
+  /// Takes the current sensor orientations as the given reference pose.
+  virtual void calibrate(CalibrationPose pose) = 0;
+  /// Re-aligns the heading so the performer faces +x (east) now.
+  virtual void reset_heading() = 0;
+};
+
+}  // namespace mocap::daemon

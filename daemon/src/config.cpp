@@ -1,0 +1,673 @@
+// Loads and validates the daemon's TOML configuration: typed, range-checked reads with
+// file:line:column errors, unknown keys rejected with the nearest valid name, --set overrides,
+// and the effective configuration printed back as TOML.
+#include "mocap/daemon/config.hpp"
+
+#include <arpa/inet.h>
+#include <unistd.h>
+
+#include <toml++/toml.h>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/skeleton/pose_frame.hpp"
+
+namespace mocap::daemon {
+
+std::string ConfigError::to_string() const {
+  std::string out = file.empty() ? std::string("<config>") : file;
+  if (line > 0) out += ":" + std::to_string(line) + ":" + std::to_string(column);
+  out += ": ";
+  if (!key.empty()) out += key + ": ";
+  return out + message;
+}
+
+std::string ConfigErrors::to_string() const {
+  std::string out;
+  for (const auto& e : errors)
+    out += e.to_string() + "\n";
+  return out;
+}
+
+int edit_distance(std::string_view a, std::string_view b) {
+  std::vector<int> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j)
+    row[j] = static_cast<int>(j);
+  for (size_t i = 1; i <= a.size(); ++i) {
+    int diag = row[0];
+    row[0] = static_cast<int>(i);
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const int up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string nearest_name(std::string_view word, const std::vector<std::string_view>& candidates) {
+  std::string best;
+  int best_d = 1 << 30;
+  for (auto c : candidates) {
+    const int d = edit_distance(word, c);
+    if (d < best_d) {
+      best_d = d;
+      best = std::string(c);
+    }
+  }
+  // Plausible only if fewer than half the letters differ (and at most 4 edits).
+  const int limit = std::min<int>(4, std::max<int>(1, static_cast<int>(word.size()) / 2));
+  return best_d <= limit ? best : std::string();
+}
+
+LogLevel log_level_of(std::string_view name) {
+  LogLevel l = LogLevel::info;
+  parse_log_level(name, l);
+  return l;
+}
+
+std::string default_control_socket() {
+  if (const char* dir = std::getenv("XDG_RUNTIME_DIR"); dir && *dir)
+    return std::string(dir) + "/mocapd.sock";
+  return "/tmp/mocapd-" + std::to_string(getuid()) + ".sock";
+}
+
+namespace {
+
+constexpr std::string_view kLogLevels[] = {"trace", "debug", "info", "warn", "error", "off"};
+
+struct Ctx {
+  std::string source;  // file name for nodes without a source
+  ConfigErrors& errors;
+  const ConfigValidators* validators = nullptr;
+
+  void add(const toml::node* n, const std::string& key, std::string msg) {
+    ConfigError e;
+    e.file = source;
+    e.key = key;
+    e.message = std::move(msg);
+    if (n) {
+      const auto& src = n->source();
+      if (src.path && !src.path->empty()) e.file = *src.path;
+      if (e.file.rfind("--set", 0) != 0) {
+        e.line = static_cast<int>(src.begin.line);
+        e.column = static_cast<int>(src.begin.column);
+      }
+    }
+    errors.errors.push_back(std::move(e));
+  }
+};
+
+std::string join(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+std::string list_of(std::initializer_list<std::string_view> names) {
+  std::string out;
+  for (auto n : names)
+    out += (out.empty() ? "" : ", ") + std::string(n);
+  return out;
+}
+
+/// Reads the keys of one table with types and ranges, remembering which keys are known.
+class TableReader {
+ public:
+  TableReader(const toml::table* t, const toml::node* where, std::string path, Ctx& ctx)
+      : t_(t), where_(where), path_(std::move(path)), ctx_(ctx) {}
+
+  const toml::node* node(std::string_view key) {
+    known_.push_back(key);
+    return t_ ? t_->get(key) : nullptr;
+  }
+
+  void str(std::string_view key, std::string& out,
+           std::initializer_list<std::string_view> allowed = {}) {
+    const toml::node* n = node(key);
+    if (!n) return;
+    auto v = n->value<std::string>();
+    if (!n->is_string() || !v) return type_error(n, key, "a string");
+    if (allowed.size() && std::find(allowed.begin(), allowed.end(), *v) == allowed.end()) {
+      std::string msg = "'" + *v + "' is not one of " + list_of(allowed);
+      auto near = nearest_name(*v, std::vector<std::string_view>(allowed));
+      if (!near.empty()) msg += " (did you mean '" + near + "'?)";
+      return ctx_.add(n, join(path_, key), msg);
+    }
+    out = *v;
+  }
+
+  void num(std::string_view key, double& out, double lo, double hi) {
+    const toml::node* n = node(key);
+    if (!n) return;
+    if (!n->is_number()) return type_error(n, key, "a number");
+    const double v = *n->value<double>();
+    if (!std::isfinite(v) || v < lo || v > hi) {
+      std::ostringstream m;
+      m << v << " is out of range [" << lo << ", " << hi << "]";
+      return ctx_.add(n, join(path_, key), m.str());
+    }
+    out = v;
+  }
+
+  template <typename Int>
+  void integer(std::string_view key, Int& out, int64_t lo, int64_t hi) {
+    const toml::node* n = node(key);
+    if (!n) return;
+    if (!n->is_integer()) return type_error(n, key, "an integer");
+    const int64_t v = *n->value<int64_t>();
+    if (v < lo || v > hi) {
+      return ctx_.add(n, join(path_, key),
+                      std::to_string(v) + " is out of range [" + std::to_string(lo) + ", " +
+                          std::to_string(hi) + "]");
+    }
+    out = static_cast<Int>(v);
+  }
+
+  void boolean(std::string_view key, bool& out) {
+    const toml::node* n = node(key);
+    if (!n) return;
+    if (!n->is_boolean()) return type_error(n, key, "true or false");
+    out = *n->value<bool>();
+  }
+
+  /// A sub-table (nullptr if absent or not a table; the latter is reported).
+  const toml::table* table(std::string_view key) {
+    const toml::node* n = node(key);
+    if (!n) return nullptr;
+    if (!n->is_table()) {
+      type_error(n, key, "a table");
+      return nullptr;
+    }
+    return n->as_table();
+  }
+
+  /// Reports keys that were never asked for, with the nearest known name.
+  void finish() {
+    if (!t_) return;
+    for (const auto& [k, v] : *t_) {
+      if (std::find(known_.begin(), known_.end(), k.str()) != known_.end()) continue;
+      std::string msg = "unknown key";
+      auto near = nearest_name(k.str(), known_);
+      if (!near.empty())
+        msg += " (did you mean '" + near + "'?)";
+      else
+        msg += " (valid keys: " + list_known() + ")";
+      ctx_.add(&v, join(path_, k.str()), msg);
+    }
+  }
+
+  const std::string& path() const { return path_; }
+  const toml::node* where() const { return where_; }
+
+ private:
+  void type_error(const toml::node* n, std::string_view key, const char* want) {
+    ctx_.add(n, join(path_, key), std::string("expected ") + want);
+  }
+  std::string list_known() const {
+    std::string out;
+    for (auto k : known_)
+      out += (out.empty() ? "" : ", ") + std::string(k);
+    return out;
+  }
+
+  const toml::table* t_;
+  const toml::node* where_;
+  std::string path_;
+  Ctx& ctx_;
+  std::vector<std::string_view> known_;
+};
+
+/// A scalar's text: strings as they are, numbers and booleans as TOML writes them.
+bool scalar_text(const toml::node& v, std::string& out) {
+  if (v.is_string())
+    out = *v.value<std::string>();
+  else if (v.is_integer())
+    out = std::to_string(*v.value<int64_t>());
+  else if (v.is_floating_point()) {
+    std::ostringstream o;
+    o.precision(17);
+    o << *v.value<double>();
+    out = o.str();
+  } else if (v.is_boolean())
+    out = *v.value<bool>() ? "true" : "false";
+  else
+    return false;
+  return true;
+}
+
+bool valid_axis_remap(std::string_view s) {
+  // Three comma-separated axes, each [+|-]x|y|z, a permutation of x, y, z.
+  bool seen[3] = {false, false, false};
+  int count = 0;
+  size_t i = 0;
+  while (i <= s.size()) {
+    size_t j = s.find(',', i);
+    if (j == std::string_view::npos) j = s.size();
+    std::string_view a = s.substr(i, j - i);
+    if (!a.empty() && (a[0] == '-' || a[0] == '+')) a.remove_prefix(1);
+    if (a.size() != 1 || a[0] < 'x' || a[0] > 'z' || seen[a[0] - 'x']) return false;
+    seen[a[0] - 'x'] = true;
+    ++count;
+    i = j + 1;
+  }
+  return count == 3;
+}
+
+bool valid_sensor_name(std::string_view s) {
+  if (s.empty() || s.size() > 23) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '-';
+  });
+}
+
+void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& ctx,
+                 SensorConfig& s) {
+  const size_t errors_before = ctx.errors.errors.size();
+  TableReader r(&t, where, "sensor[" + std::to_string(index) + "]", ctx);
+  r.str("name", s.name);
+  r.str("driver", s.driver);
+  r.str("port", s.port);
+  r.integer("vid", s.vid, 0, 0xFFFF);
+  r.integer("pid", s.pid, 0, 0xFFFF);
+  r.str("serial", s.serial);
+  r.boolean("hid", s.hid);
+  r.integer("baud", s.baud, 0, 4000000);
+  r.num("rate_hz", s.rate_hz, 0, 10000);
+  r.str("segment", s.segment);
+  r.str("axis_remap", s.axis_remap);
+  r.str("log_level", s.log_level, {"trace", "debug", "info", "warn", "error", "off"});
+  if (const toml::table* opts = r.table("options")) {
+    for (const auto& [k, v] : *opts) {
+      if (v.is_string())
+        s.options[std::string(k.str())] = *v.value<std::string>();
+      else if (v.is_integer())
+        s.options[std::string(k.str())] = std::to_string(*v.value<int64_t>());
+      else if (v.is_floating_point()) {
+        std::ostringstream o;
+        o << *v.value<double>();
+        s.options[std::string(k.str())] = o.str();
+      } else if (v.is_boolean())
+        s.options[std::string(k.str())] = *v.value<bool>() ? "true" : "false";
+      else
+        ctx.add(&v, r.path() + ".options." + std::string(k.str()),
+                "expected a string, number or boolean");
+    }
+  }
+  r.finish();
+
+  auto at = [&](std::string_view key) -> const toml::node* {
+    const toml::node* n = t.get(key);
+    return n ? n : where;
+  };
+  const std::string p = r.path();
+  if (!valid_sensor_name(s.name))
+    ctx.add(at("name"), p + ".name", "needs a name of 1-23 letters, digits, '_' or '-'");
+  if (s.driver.empty()) ctx.add(at("driver"), p + ".driver", "needs a driver (protocol name)");
+  const bool has_ids = s.vid >= 0 || s.pid >= 0;
+  if (has_ids && (s.vid < 0 || s.pid < 0))
+    ctx.add(at(s.vid < 0 ? "pid" : "vid"), p, "vid and pid go together");
+  if (s.port.empty() && !has_ids) ctx.add(where, p, "needs either port or vid and pid");
+  if (!s.port.empty() && has_ids)
+    ctx.add(at("port"), p + ".port", "give either port or vid/pid, not both");
+  if (!s.segment.empty() && !segment_from_name(s.segment)) {
+    std::vector<std::string_view> names(kSegmentNames.begin(), kSegmentNames.end());
+    std::string msg = "unknown segment '" + s.segment + "'";
+    auto near = nearest_name(s.segment, names);
+    if (!near.empty()) msg += " (did you mean '" + near + "'?)";
+    ctx.add(at("segment"), p + ".segment", msg);
+  }
+  if (!valid_axis_remap(s.axis_remap))
+    ctx.add(at("axis_remap"), p + ".axis_remap",
+            "'" + s.axis_remap + "' is not a permutation like \"x,y,z\" or \"-y,x,z\"");
+  if (ctx.errors.errors.size() == errors_before && ctx.validators && ctx.validators->sensor) {
+    if (std::string err = ctx.validators->sensor(s); !err.empty())
+      ctx.add(at("driver"), p + ".driver", err);
+  }
+}
+
+bool valid_ipv4(const std::string& s) {
+  in_addr a{};
+  return inet_pton(AF_INET, s.c_str(), &a) == 1;
+}
+
+Config read_root(const toml::table& root, Ctx& ctx) {
+  Config c;
+  TableReader r(&root, &root, "", ctx);
+  {
+    TableReader d(r.table("daemon"), &root, "daemon", ctx);
+    d.str("log_level", c.daemon.log_level, {"trace", "debug", "info", "warn", "error", "off"});
+    d.str("control_socket", c.daemon.control_socket);
+    d.finish();
+  }
+  {
+    TableReader p(r.table("pipeline"), &root, "pipeline", ctx);
+    p.num("rate_hz", c.pipeline.rate_hz, 1, 2000);
+    p.boolean("publish_every_sample", c.pipeline.publish_every_sample);
+    p.num("stale_after_ms", c.pipeline.stale_after_ms, 10, 60000);
+    p.finish();
+  }
+  if (const toml::table* ft = r.table("filter")) {
+    // use_mag, plus any FilterParams name (checked by the filter module when validators given).
+    for (const auto& [k, v] : *ft) {
+      const std::string key(k.str());
+      const std::string path = "filter." + key;
+      if (key == "use_mag") {
+        if (!v.is_boolean())
+          ctx.add(&v, path, "expected true or false");
+        else
+          c.filter.use_mag = *v.value<bool>();
+        continue;
+      }
+      std::string text;
+      if (!scalar_text(v, text)) {
+        ctx.add(&v, path, "expected a number or boolean");
+        continue;
+      }
+      if (ctx.validators && ctx.validators->filter_param) {
+        if (std::string err = ctx.validators->filter_param(key, text); !err.empty()) {
+          std::vector<std::string_view> names(ctx.validators->filter_param_names.begin(),
+                                              ctx.validators->filter_param_names.end());
+          names.push_back("use_mag");
+          const std::string near = nearest_name(key, names);
+          ctx.add(&v, path,
+                  err + (near.empty() || near == key ? "" : " (did you mean '" + near + "'?)"));
+          continue;
+        }
+      }
+      c.filter.params[key] = text;
+    }
+  }
+  {
+    TableReader b(r.table("body"), &root, "body", ctx);
+    b.num("height_m", c.body.height_m, 0.5, 2.5);
+    b.boolean("enforce_limits", c.body.enforce_limits);
+    b.boolean("root_motion", c.body.root_motion);
+    b.finish();
+  }
+  {
+    TableReader k(r.table("calibration"), &root, "calibration", ctx);
+    k.str("pose", c.calibration.pose, {"npose", "tpose"});
+    k.num("countdown_s", c.calibration.countdown_s, 0, 60);
+    k.num("capture_s", c.calibration.capture_s, 0.05, 10);
+    k.str("file", c.calibration.file);
+    k.finish();
+  }
+  if (const toml::table* outs = r.table("outputs")) {
+    TableReader o(outs, &root, "outputs", ctx);
+    {
+      TableReader j(o.table("json"), outs, "outputs.json", ctx);
+      j.boolean("enabled", c.outputs.json.enabled);
+      j.str("bind", c.outputs.json.bind);
+      j.integer("port", c.outputs.json.port, 0, 65535);
+      j.finish();
+      if (!valid_ipv4(c.outputs.json.bind))
+        ctx.add(outs->get("json") ? outs->get_as<toml::table>("json")->get("bind") : nullptr,
+                "outputs.json.bind", "'" + c.outputs.json.bind + "' is not an IPv4 address");
+    }
+    {
+      TableReader v(o.table("vmc"), outs, "outputs.vmc", ctx);
+      v.boolean("enabled", c.outputs.vmc.enabled);
+      v.str("host", c.outputs.vmc.host);
+      v.integer("port", c.outputs.vmc.port, 1, 65535);
+      v.finish();
+      if (!valid_ipv4(c.outputs.vmc.host))
+        ctx.add(outs->get("vmc") ? outs->get_as<toml::table>("vmc")->get("host") : nullptr,
+                "outputs.vmc.host", "'" + c.outputs.vmc.host + "' is not an IPv4 address");
+    }
+    {
+      TableReader s(o.table("posture"), outs, "outputs.posture", ctx);
+      s.boolean("enabled", c.outputs.posture.enabled);
+      s.str("shm_name", c.outputs.posture.shm_name);
+      s.finish();
+    }
+    o.finish();
+  }
+  {
+    TableReader k(r.table("recording"), &root, "recording", ctx);
+    k.str("directory", c.recording.directory);
+    k.boolean("raw", c.recording.raw);
+    k.boolean("samples", c.recording.samples);
+    k.boolean("poses", c.recording.poses);
+    k.str("auto_start", c.recording.auto_start);
+    k.finish();
+  }
+  {
+    TableReader d(r.table("demo"), &root, "demo", ctx);
+    d.str("path", c.demo.path, {"device", "direct"});
+    d.str("protocol", c.demo.protocol);
+    d.num("rate_hz", c.demo.rate_hz, 1, 2000);
+    d.str("motion", c.demo.motion);
+    d.integer("seed", c.demo.seed, 0, INT64_MAX);
+    d.finish();
+  }
+  if (const toml::node* sn = r.node("sensor")) {
+    const toml::array* arr = sn->as_array();
+    if (!arr || !arr->is_array_of_tables()) {
+      ctx.add(sn, "sensor", "expected [[sensor]] tables");
+    } else {
+      int i = 0;
+      std::set<std::string> names, segments;
+      for (const auto& el : *arr) {
+        SensorConfig s;
+        read_sensor(*el.as_table(), &el, i, ctx, s);
+        const std::string p = "sensor[" + std::to_string(i) + "]";
+        if (!s.name.empty() && !names.insert(s.name).second)
+          ctx.add(el.as_table()->get("name"), p + ".name",
+                  "duplicate sensor name '" + s.name + "'");
+        if (!s.segment.empty() && !segments.insert(s.segment).second)
+          ctx.add(el.as_table()->get("segment"), p + ".segment",
+                  "segment '" + s.segment + "' already has a sensor");
+        c.sensors.push_back(std::move(s));
+        ++i;
+      }
+      if (c.sensors.size() > static_cast<size_t>(kMaxSensors))
+        ctx.add(sn, "sensor", "at most " + std::to_string(kMaxSensors) + " sensors");
+    }
+  }
+  r.finish();
+  return c;
+}
+
+std::string toml_quote(std::string_view s) {
+  std::string out = "\"";
+  for (char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
+}
+
+bool is_index(std::string_view s) {
+  return !s.empty() && s.size() < 4 && std::all_of(s.begin(), s.end(), ::isdigit);
+}
+
+/// Applies "a.b.c=VALUE" to the parsed document. Sensor entries are addressed by index or name:
+/// "sensor.0.port=..." or "sensor.pelvis.port=...".
+void apply_override(toml::table& root, const std::string& kv, Ctx& ctx) {
+  const size_t eq = kv.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    ctx.add(nullptr, kv, "--set needs KEY=VALUE");
+    return;
+  }
+  const std::string key = kv.substr(0, eq), value = kv.substr(eq + 1);
+  std::vector<std::string> parts;
+  for (size_t i = 0;;) {
+    size_t j = key.find('.', i);
+    parts.push_back(key.substr(i, j == std::string::npos ? std::string::npos : j - i));
+    if (j == std::string::npos) break;
+    i = j + 1;
+  }
+  for (const auto& p : parts)
+    if (p.empty()) return ctx.add(nullptr, key, "--set: empty key component");
+  // Parse VALUE as TOML; a bare word becomes a string.
+  toml::table parsed;
+  const std::string src = "--set " + key;
+  try {
+    parsed = toml::parse("v = " + value, src);
+  } catch (const toml::parse_error&) {
+    try {
+      parsed = toml::parse("v = " + toml_quote(value), src);
+    } catch (const toml::parse_error& e) {
+      return ctx.add(nullptr, key,
+                     std::string("--set: bad value: ") + std::string(e.description()));
+    }
+  }
+  toml::table* t = &root;
+  for (size_t i = 0; i + 1 < parts.size(); ++i) {
+    toml::node* n = t->get(parts[i]);
+    if (!n) {
+      t->insert_or_assign(parts[i], toml::table{});
+      n = t->get(parts[i]);
+    }
+    if (auto* arr = n->as_array()) {
+      // Pick an element of an array of tables by index or by its "name".
+      if (i + 2 >= parts.size())
+        return ctx.add(nullptr, key, "--set: '" + parts[i] + "' needs an index or name");
+      const std::string& sel = parts[++i];
+      toml::table* found = nullptr;
+      if (is_index(sel)) {
+        const size_t idx = std::stoul(sel);
+        if (idx < arr->size()) found = (*arr)[idx].as_table();
+      } else {
+        for (auto& el : *arr)
+          if (auto* et = el.as_table(); et && et->get_as<std::string>("name") &&
+                                        et->get_as<std::string>("name")->get() == sel)
+            found = et;
+      }
+      if (!found) return ctx.add(nullptr, key, "--set: no " + parts[i - 1] + " '" + sel + "'");
+      t = found;
+      continue;
+    }
+    t = n->as_table();
+    if (!t) return ctx.add(nullptr, key, "--set: '" + parts[i] + "' is not a table");
+  }
+  t->insert_or_assign(parts.back(), std::move(*parsed.get("v")));
+}
+
+}  // namespace
+
+std::optional<Config> parse_config(std::string_view toml_text, std::string_view source_name,
+                                   const std::vector<std::string>& overrides, ConfigErrors& errors,
+                                   const ConfigValidators* validators) {
+  Ctx ctx{std::string(source_name), errors, validators};
+  toml::table root;
+  try {
+    root = toml::parse(toml_text, source_name);
+  } catch (const toml::parse_error& e) {
+    ConfigError err;
+    err.file = std::string(source_name);
+    err.line = static_cast<int>(e.source().begin.line);
+    err.column = static_cast<int>(e.source().begin.column);
+    err.message = std::string(e.description());
+    errors.errors.push_back(std::move(err));
+    return std::nullopt;
+  }
+  for (const auto& kv : overrides)
+    apply_override(root, kv, ctx);
+  if (!errors.errors.empty()) return std::nullopt;
+  Config c = read_root(root, ctx);
+  c.source = std::string(source_name);
+  if (!errors.errors.empty()) return std::nullopt;
+  return c;
+}
+
+std::optional<Config> load_config(const std::string& path,
+                                  const std::vector<std::string>& overrides, ConfigErrors& errors,
+                                  const ConfigValidators* validators) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    errors.errors.push_back({path, 0, 0, "", "cannot open the file"});
+    return std::nullopt;
+  }
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return parse_config(ss.str(), path, overrides, errors, validators);
+}
+
+std::string config_to_toml(const Config& c) {
+  toml::table root;
+  root.insert("daemon", toml::table{{"log_level", c.daemon.log_level},
+                                    {"control_socket", c.daemon.control_socket}});
+  root.insert("pipeline", toml::table{{"rate_hz", c.pipeline.rate_hz},
+                                      {"publish_every_sample", c.pipeline.publish_every_sample},
+                                      {"stale_after_ms", c.pipeline.stale_after_ms}});
+  {
+    toml::table f{{"use_mag", c.filter.use_mag}};
+    for (const auto& [k, v] : c.filter.params) {
+      // Values were numbers or booleans: print them back as such.
+      if (v == "true" || v == "false")
+        f.insert(k, v == "true");
+      else if (v.find_first_of(".eEnN") == std::string::npos)
+        f.insert(k, std::stoll(v));
+      else
+        f.insert(k, std::stod(v));
+    }
+    root.insert("filter", std::move(f));
+  }
+  root.insert("body", toml::table{{"height_m", c.body.height_m},
+                                  {"enforce_limits", c.body.enforce_limits},
+                                  {"root_motion", c.body.root_motion}});
+  root.insert("calibration", toml::table{{"pose", c.calibration.pose},
+                                         {"countdown_s", c.calibration.countdown_s},
+                                         {"capture_s", c.calibration.capture_s},
+                                         {"file", c.calibration.file}});
+  toml::table outs;
+  outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
+                                  {"bind", c.outputs.json.bind},
+                                  {"port", c.outputs.json.port}});
+  outs.insert("vmc", toml::table{{"enabled", c.outputs.vmc.enabled},
+                                 {"host", c.outputs.vmc.host},
+                                 {"port", c.outputs.vmc.port}});
+  outs.insert("posture", toml::table{{"enabled", c.outputs.posture.enabled},
+                                     {"shm_name", c.outputs.posture.shm_name}});
+  root.insert("outputs", std::move(outs));
+  root.insert("recording", toml::table{{"directory", c.recording.directory},
+                                       {"raw", c.recording.raw},
+                                       {"samples", c.recording.samples},
+                                       {"poses", c.recording.poses},
+                                       {"auto_start", c.recording.auto_start}});
+  root.insert("demo", toml::table{{"path", c.demo.path},
+                                  {"protocol", c.demo.protocol},
+                                  {"rate_hz", c.demo.rate_hz},
+                                  {"motion", c.demo.motion},
+                                  {"seed", static_cast<int64_t>(c.demo.seed)}});
+  toml::array sensors;
+  for (const auto& s : c.sensors) {
+    toml::table t{{"name", s.name},          {"driver", s.driver},   {"baud", s.baud},
+                  {"rate_hz", s.rate_hz},    {"segment", s.segment}, {"axis_remap", s.axis_remap},
+                  {"log_level", s.log_level}};
+    if (!s.port.empty()) t.insert("port", s.port);
+    if (s.vid >= 0) {
+      t.insert("vid", s.vid);
+      t.insert("pid", s.pid);
+      t.insert("hid", s.hid);
+      if (!s.serial.empty()) t.insert("serial", s.serial);
+    }
+    toml::table opts;
+    for (const auto& [k, v] : s.options)
+      opts.insert(k, v);
+    t.insert("options", std::move(opts));
+    sensors.push_back(std::move(t));
+  }
+  if (!sensors.empty()) root.insert("sensor", std::move(sensors));
+  std::ostringstream out;
+  out << "# mocapd effective configuration" << (c.source.empty() ? "" : " (from " + c.source + ")")
+      << "\n"
+      << toml::toml_formatter(root) << "\n";
+  return out.str();
+}
+
+}  // namespace mocap::daemon

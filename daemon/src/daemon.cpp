@@ -1,0 +1,233 @@
+// Daemon assembly: devices feed the pipeline, the pipeline feeds the outputs, the control
+// socket drives commands and reports status as JSON.
+#include "mocap/daemon/daemon.hpp"
+
+#include <poll.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/core/time.hpp"
+
+namespace mocap::daemon {
+
+std::vector<SensorInfo> sensor_infos(const Config& cfg) {
+  std::vector<SensorInfo> out;
+  for (const auto& s : cfg.sensors) {
+    SensorInfo i;
+    i.name = s.name;
+    if (auto seg = segment_from_name(s.segment)) i.segment = index(*seg);
+    out.push_back(i);
+  }
+  return out;
+}
+
+DeviceSpec device_spec(const Config& cfg, size_t i) {
+  const SensorConfig& s = cfg.sensors.at(i);
+  DeviceSpec d;
+  d.name = s.name;
+  d.protocol = s.driver;
+  if (!s.port.empty()) {
+    d.port = s.port;
+  } else {
+    char ids[32];
+    std::snprintf(ids, sizeof ids, "%04x:%04x", s.vid, s.pid);
+    d.port = std::string(s.hid ? "hid:" : "usb:") + ids + (s.serial.empty() ? "" : ":" + s.serial);
+  }
+  d.baud = s.baud;
+  d.rate_hz = s.rate_hz;
+  d.device_index = static_cast<uint16_t>(i);
+  d.first_sensor_id = static_cast<uint16_t>(i);
+  d.axis_remap = s.axis_remap;
+  d.options = s.options;
+  return d;
+}
+
+Daemon::Daemon(Config cfg, Parts parts, Logger log)
+    : cfg_(std::move(cfg)), parts_(std::move(parts)), log_(std::move(log)) {
+  if (!parts_.engine) throw std::invalid_argument("daemon needs a pose engine");
+  pipeline_ = std::make_unique<Pipeline>(cfg_.pipeline, cfg_.calibration, sensor_infos(cfg_),
+                                         *parts_.engine, log_.child("pipeline", log_.level()));
+  for (auto& s : parts_.sinks)
+    pipeline_->add_sink(s.get());
+  control_path_ =
+      cfg_.daemon.control_socket.empty() ? default_control_socket() : cfg_.daemon.control_socket;
+}
+
+Daemon::~Daemon() {
+  shutdown();
+}
+
+void Daemon::start() {
+  started_ns_ = monotonic_ns();
+  if (parts_.frame_flags) {
+    for (uint32_t bit = 1; bit; bit <<= 1)
+      if (parts_.frame_flags & bit) pipeline_->set_frame_flag(bit, true);
+  }
+  pipeline_->start();
+  running_ = true;
+  for (auto& s : parts_.services)
+    s->start(*pipeline_);
+  if (parts_.device_factory) {
+    for (size_t i = 0; i < cfg_.sensors.size(); ++i) {
+      const auto& s = cfg_.sensors[i];
+      auto dev = parts_.device_factory(device_spec(cfg_, i),
+                                       log_.child(s.name, log_level_of(s.log_level)));
+      dev->start(*pipeline_);
+      devices_.push_back(std::move(dev));
+    }
+  }
+  control_ = std::make_unique<ControlServer>(
+      control_path_, [this](const ControlRequest& r) { return handle(r); },
+      log_.child("control", log_.level()));
+  if (!cfg_.recording.auto_start.empty()) {
+    ControlRequest r{ControlCommand::record_start, cfg_.recording.auto_start};
+    const std::string reply = handle(r);
+    if (reply.find("\"ok\":false") != std::string::npos)
+      throw std::runtime_error("recording.auto_start: " + reply);
+  }
+  log_.info("running: %zu sensors, %.0f Hz frames, control socket %s", cfg_.sensors.size(),
+            cfg_.pipeline.rate_hz, control_path_.c_str());
+}
+
+void Daemon::wait(int extra_fd) {
+  for (;;) {
+    pollfd fds[2] = {{stop_.fd(), POLLIN, 0}, {extra_fd, POLLIN, 0}};
+    const int n = ::poll(fds, extra_fd >= 0 ? 2 : 1, 500);
+    if (n > 0 && (fds[0].revents & POLLIN)) return;
+    if (n > 0 && extra_fd >= 0 && (fds[1].revents & POLLIN)) return;
+    update_device_counters();
+    if (parts_.recorder) {
+      const std::string err = parts_.recorder->error();
+      std::lock_guard lock(rec_mu_);
+      if (!err.empty() && !recording_path_.empty()) {
+        log_.error("recording %s stopped: %s", recording_path_.c_str(), err.c_str());
+        pipeline_->set_record_tap(nullptr);
+        parts_.recorder->stop();
+        pipeline_->set_frame_flag(kFrameRecording, false);
+        recording_path_.clear();
+      }
+    }
+  }
+}
+
+void Daemon::update_device_counters() {
+  for (size_t i = 0; i < devices_.size(); ++i) {
+    const DeviceStats st = devices_[i]->stats();
+    pipeline_->set_device_counters(
+        static_cast<int>(i), static_cast<uint32_t>(st.decoder.dropped_samples),
+        static_cast<uint32_t>(st.decoder.checksum_errors + st.decoder.resyncs));
+  }
+}
+
+void Daemon::shutdown() {
+  if (!running_) return;
+  running_ = false;
+  control_.reset();
+  for (auto& d : devices_)
+    d->stop();
+  pipeline_->stop();
+  std::lock_guard lock(rec_mu_);
+  if (!recording_path_.empty() && parts_.recorder) {
+    pipeline_->set_record_tap(nullptr);
+    parts_.recorder->stop();
+    log_.info("recording %s closed", recording_path_.c_str());
+    recording_path_.clear();
+  }
+  devices_.clear();
+}
+
+std::string Daemon::handle(const ControlRequest& r) {
+  nlohmann::json ok{{"ok", true}};
+  switch (r.command) {
+    case ControlCommand::status:
+      return status_json();
+    case ControlCommand::calibrate:
+      pipeline_->calibrate(r.argument == "tpose" ? CalibrationPose::tpose : CalibrationPose::npose);
+      ok["message"] = "calibration (" + r.argument + ") in " +
+                      std::to_string(static_cast<int>(std::lround(cfg_.calibration.countdown_s))) +
+                      " s: hold the pose";
+      return ok.dump();
+    case ControlCommand::reset_heading:
+      pipeline_->reset_heading();
+      ok["message"] = "heading reset";
+      return ok.dump();
+    case ControlCommand::record_start: {
+      if (!parts_.recorder) return control_error_reply("recording is not available in this build");
+      std::lock_guard lock(rec_mu_);
+      if (!recording_path_.empty())
+        return control_error_reply("already recording to " + recording_path_);
+      std::filesystem::path p(r.argument);
+      if (p.is_relative()) p = std::filesystem::path(cfg_.recording.directory) / p;
+      RecordTap* tap = parts_.recorder->start(p.string());
+      pipeline_->set_record_tap(tap);
+      pipeline_->set_frame_flag(kFrameRecording, true);
+      recording_path_ = p.string();
+      log_.info("recording to %s", recording_path_.c_str());
+      ok["file"] = recording_path_;
+      return ok.dump();
+    }
+    case ControlCommand::record_stop: {
+      std::lock_guard lock(rec_mu_);
+      if (recording_path_.empty() || !parts_.recorder) return control_error_reply("not recording");
+      pipeline_->set_record_tap(nullptr);
+      parts_.recorder->stop();
+      pipeline_->set_frame_flag(kFrameRecording, false);
+      ok["file"] = recording_path_;
+      log_.info("recording %s closed", recording_path_.c_str());
+      recording_path_.clear();
+      return ok.dump();
+    }
+    case ControlCommand::quit:
+      request_stop();
+      ok["message"] = "stopping";
+      return ok.dump();
+  }
+  return control_error_reply("unhandled command");
+}
+
+std::string Daemon::status_json() const {
+  static constexpr const char* kStates[] = {"absent", "connecting", "streaming", "stale", "error"};
+  const PipelineStatus st = pipeline_->status();
+  nlohmann::json j;
+  j["ok"] = true;
+  j["uptime_s"] = ns_to_s(monotonic_ns() - started_ns_);
+  j["frame"] = st.frame.frame;
+  j["samples"] = st.samples;
+  j["rejected_samples"] = st.rejected;
+  j["ring_drops"] = st.ring_drops;
+  j["rate_hz"] = cfg_.pipeline.rate_hz;
+  j["calibrated"] = (st.frame.flags & kFrameCalibrated) != 0;
+  j["calibrating"] = (st.frame.flags & kFrameCalibrating) != 0;
+  j["calib_countdown_s"] = st.frame.calib_countdown_s;
+  j["demo"] = (st.frame.flags & kFrameDemo) != 0;
+  {
+    std::lock_guard lock(rec_mu_);
+    j["recording"] = recording_path_;
+  }
+  nlohmann::json sensors = nlohmann::json::array();
+  for (uint32_t i = 0; i < st.frame.sensor_count && i < static_cast<uint32_t>(kMaxSensors); ++i) {
+    const SensorStatus& s = st.frame.sensors[i];
+    const SensorFilterState& f = st.filter[i];
+    nlohmann::json e;
+    e["name"] = std::string(s.name, strnlen(s.name, sizeof s.name));
+    e["segment"] = s.segment >= 0 ? std::string(kSegmentNames[s.segment]) : std::string();
+    e["state"] = kStates[std::min<int>(s.state, 4)];
+    e["rate_hz"] = std::round(s.rate_hz * 10) / 10;
+    e["age_ms"] = std::round(s.last_age_ms * 10) / 10;
+    e["drops"] = s.drops;
+    e["errors"] = s.errors;
+    e["at_rest"] = f.at_rest;
+    e["mag_disturbed"] = f.mag_disturbed;
+    e["calibrated"] = f.calibrated;
+    e["gyro_bias_dps"] = std::round(s.gyro_bias_dps * 1000) / 1000;
+    e["heading_sigma_deg"] = std::round(s.heading_sigma_deg * 10) / 10;
+    sensors.push_back(e);
+  }
+  j["sensors"] = sensors;
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+}  // namespace mocap::daemon

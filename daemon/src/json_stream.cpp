@@ -1,0 +1,240 @@
+// PoseJsonServer: TCP listener and I/O thread for the pose JSON stream. The pipeline hands
+// formatted lines over through a fixed ring of slots; the I/O thread copies each line into every
+// client's bounded queue (or skips it for that client) and writes with non-blocking sockets.
+#include "mocap/daemon/json_stream.hpp"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <vector>
+
+namespace mocap::daemon {
+
+/// One connected client: a byte ring holding whole queued lines.
+struct PoseJsonServer::Client {
+  int fd = -1;
+  std::vector<char> ring;  // allocated once at accept
+  std::size_t read_pos = 0;
+  std::size_t used = 0;
+  std::size_t input_bytes = 0;
+
+  std::size_t free_bytes() const { return ring.size() - used; }
+  void push(const char* data, std::size_t len) {
+    std::size_t w = (read_pos + used) % ring.size();
+    const std::size_t first = std::min(len, ring.size() - w);
+    std::memcpy(ring.data() + w, data, first);
+    std::memcpy(ring.data(), data + first, len - first);
+    used += len;
+  }
+};
+
+PoseJsonServer::PoseJsonServer() = default;
+
+PoseJsonServer::~PoseJsonServer() {
+  stop();
+}
+
+bool PoseJsonServer::start(const Options& options, std::string* error) {
+  auto fail = [&](const std::string& what) {
+    if (error)
+      *error = "pose stream: " + what + " " + options.bind_address + ":" +
+               std::to_string(options.port) + ": " + std::strerror(errno);
+    if (listen_fd_ >= 0) ::close(listen_fd_);
+    listen_fd_ = -1;
+    return false;
+  };
+  if (thread_.joinable()) {
+    if (error) *error = "pose stream: already started";
+    return false;
+  }
+  if (options.max_clients < 1 || options.client_buffer_bytes < kPoseJsonMaxLine) {
+    if (error) *error = "pose stream: max_clients must be >= 1 and client buffer >= 16 KiB";
+    return false;
+  }
+  options_ = options;
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(options.port);
+  if (inet_pton(AF_INET, options.bind_address.c_str(), &addr.sin_addr) != 1) {
+    if (error) *error = "pose stream: bind address '" + options.bind_address + "' is not IPv4";
+    return false;
+  }
+  listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (listen_fd_ < 0) return fail("socket");
+  int one = 1;
+  ::setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+  if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0)
+    return fail("cannot bind");
+  if (::listen(listen_fd_, 16) != 0) return fail("cannot listen on");
+  socklen_t len = sizeof addr;
+  ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
+  port_ = ntohs(addr.sin_port);
+
+  slots_ = std::make_unique<Slot[]>(kSlots);
+  clients_ = std::make_unique<std::unique_ptr<Client>[]>(options.max_clients);
+  scratch_ = std::make_unique<char[]>(4096);
+  client_count_ = 0;
+  stop_.store(false);
+  thread_ = std::thread([this] { run(); });
+  return true;
+}
+
+bool PoseJsonServer::publish(const PoseFrame& frame) noexcept {
+  if (!slots_ || !thread_.joinable()) return false;
+  const uint64_t head = head_.load(std::memory_order_relaxed);
+  if (head - tail_.load(std::memory_order_acquire) >= kSlots) {
+    counters_.dropped.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
+  Slot& slot = slots_[head % kSlots];
+  slot.len = format_pose_json(frame, slot.data, sizeof slot.data);
+  head_.store(head + 1, std::memory_order_release);
+  counters_.published.fetch_add(1, std::memory_order_relaxed);
+  wakeup_.notify();
+  return true;
+}
+
+PoseJsonServer::Stats PoseJsonServer::stats() const {
+  Stats s;
+  s.frames_published = counters_.published.load();
+  s.frames_dropped = counters_.dropped.load();
+  s.frames_skipped = counters_.skipped.load();
+  s.clients_connected = counters_.connected.load();
+  s.clients_accepted = counters_.accepted.load();
+  s.clients_rejected = counters_.rejected.load();
+  s.clients_dropped = counters_.abusive.load();
+  s.bytes_sent = counters_.bytes_sent.load();
+  return s;
+}
+
+void PoseJsonServer::stop() {
+  if (thread_.joinable()) {
+    stop_.store(true);
+    wakeup_.notify();
+    thread_.join();
+  }
+  for (std::size_t i = client_count_; i > 0; --i)
+    remove_client(i - 1);
+  if (listen_fd_ >= 0) ::close(listen_fd_);
+  listen_fd_ = -1;
+}
+
+void PoseJsonServer::remove_client(std::size_t i) {
+  ::close(clients_[i]->fd);
+  clients_[i] = std::move(clients_[client_count_ - 1]);
+  --client_count_;
+  counters_.connected.store(client_count_);
+}
+
+void PoseJsonServer::accept_clients() {
+  for (;;) {
+    const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    if (fd < 0) return;  // EAGAIN, or a transient error: poll again
+    if (client_count_ >= static_cast<std::size_t>(options_.max_clients)) {
+      ::close(fd);
+      counters_.rejected.fetch_add(1);
+      continue;
+    }
+    int one = 1;
+    ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    auto c = std::make_unique<Client>();
+    c->fd = fd;
+    c->ring.resize(options_.client_buffer_bytes);
+    clients_[client_count_++] = std::move(c);
+    counters_.accepted.fetch_add(1);
+    counters_.connected.store(client_count_);
+  }
+}
+
+void PoseJsonServer::deliver(const Slot& slot) {
+  if (slot.len == 0) return;
+  for (std::size_t i = 0; i < client_count_; ++i) {
+    Client& c = *clients_[i];
+    if (c.free_bytes() < slot.len) {
+      counters_.skipped.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
+    c.push(slot.data, slot.len);
+  }
+}
+
+bool PoseJsonServer::flush(Client& c) {
+  while (c.used > 0) {
+    const std::size_t first = std::min(c.used, c.ring.size() - c.read_pos);
+    const ssize_t n = ::send(c.fd, c.ring.data() + c.read_pos, first, MSG_NOSIGNAL | MSG_DONTWAIT);
+    if (n < 0) {
+      if (errno == EAGAIN || errno == EWOULDBLOCK) return true;
+      if (errno == EINTR) continue;
+      return false;  // EPIPE, ECONNRESET: the client is gone
+    }
+    c.read_pos = (c.read_pos + static_cast<std::size_t>(n)) % c.ring.size();
+    c.used -= static_cast<std::size_t>(n);
+    counters_.bytes_sent.fetch_add(static_cast<uint64_t>(n), std::memory_order_relaxed);
+  }
+  return true;
+}
+
+void PoseJsonServer::run() {
+  const std::size_t max_fds = static_cast<std::size_t>(options_.max_clients) + 2;
+  std::vector<pollfd> fds(max_fds);  // allocated once for the thread's life
+  while (!stop_.load()) {
+    fds[0] = {wakeup_.fd(), POLLIN, 0};
+    fds[1] = {listen_fd_, POLLIN, 0};
+    for (std::size_t i = 0; i < client_count_; ++i) {
+      const Client& c = *clients_[i];
+      fds[i + 2] = {c.fd, static_cast<short>(POLLIN | (c.used ? POLLOUT : 0)), 0};
+    }
+    const std::size_t nfds = client_count_ + 2;
+    const int r = ::poll(fds.data(), nfds, 500);
+    if (r < 0 && errno != EINTR) break;
+    if (stop_.load()) break;
+
+    // Clients first (indices match fds as built above); iterate backwards so removal by
+    // swapping with the last client does not disturb the ones not yet visited.
+    for (std::size_t i = nfds - 2; i > 0; --i) {
+      const std::size_t ci = i - 1;
+      const short re = fds[ci + 2].revents;
+      if (!re) continue;
+      Client& c = *clients_[ci];
+      bool keep = true;
+      if (re & POLLIN) {
+        const ssize_t n = ::recv(c.fd, scratch_.get(), 4096, MSG_DONTWAIT);
+        if (n == 0) {
+          keep = false;  // orderly shutdown by the client
+        } else if (n > 0) {
+          c.input_bytes += static_cast<std::size_t>(n);
+          if (c.input_bytes > options_.max_client_input_bytes) {
+            keep = false;
+            counters_.abusive.fetch_add(1);
+          }
+        } else if (errno != EAGAIN && errno != EINTR) {
+          keep = false;
+        }
+      }
+      if (keep && (re & (POLLERR | POLLHUP | POLLNVAL))) keep = false;
+      if (keep && (re & POLLOUT)) keep = flush(c);
+      if (!keep) remove_client(ci);
+    }
+    if (fds[1].revents & POLLIN) accept_clients();
+    if (fds[0].revents & POLLIN) wakeup_.wait(0);
+
+    uint64_t tail = tail_.load(std::memory_order_relaxed);
+    const uint64_t head = head_.load(std::memory_order_acquire);
+    if (tail != head) {
+      for (; tail != head; ++tail)
+        deliver(slots_[tail % kSlots]);
+      tail_.store(tail, std::memory_order_release);
+      for (std::size_t i = client_count_; i > 0; --i)
+        if (!flush(*clients_[i - 1])) remove_client(i - 1);
+    }
+  }
+}
+
+}  // namespace mocap::daemon

@@ -1,0 +1,238 @@
+// The live pipeline thread: wait for samples or the next frame tick, drain every ring, merge by
+// timestamp into PipelineCore, publish frames on the wall-clock frame grid.
+#include "mocap/daemon/pipeline.hpp"
+
+#include <poll.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "mocap/core/time.hpp"
+
+namespace mocap::daemon {
+
+namespace {
+
+/// Waits until fd is readable or the deadline passes, with nanosecond precision.
+void wait_until(int fd, int64_t deadline_ns) {
+  const int64_t left = deadline_ns - monotonic_ns();
+  if (left <= 0) return;
+  pollfd p{fd, POLLIN, 0};
+  timespec ts{static_cast<time_t>(left / 1'000'000'000), static_cast<long>(left % 1'000'000'000)};
+  ::ppoll(&p, 1, &ts, nullptr);
+}
+
+}  // namespace
+
+Pipeline::Pipeline(const PipelineConfig& cfg, const CalibrationConfig& calib,
+                   std::vector<SensorInfo> sensors, PoseEngine& engine, Logger log)
+    : cfg_(cfg), log_(std::move(log)), core_(cfg, calib, std::move(sensors), engine) {
+  const size_t n = core_.sensors().size();
+  for (size_t i = 0; i < n; ++i) {
+    slots_.push_back(std::make_unique<Slot>());
+    scratch_.emplace_back(kRingCapacity);
+    device_sensor_.push_back(static_cast<int>(i));
+  }
+  scratch_n_.assign(n, 0);
+  scratch_pos_.assign(n, 0);
+  commands_.reserve(64);
+  commands_work_.reserve(64);
+  core_.add_sink(&tap_sink_);
+  reset_pose(status_.frame);
+}
+
+Pipeline::~Pipeline() {
+  stop();
+}
+
+void Pipeline::start() {
+  if (running_.exchange(true)) return;
+  thread_ = std::thread([this] { run(); });
+}
+
+void Pipeline::stop() {
+  if (!running_.exchange(false)) return;
+  wake_.notify();
+  if (thread_.joinable()) thread_.join();
+}
+
+void Pipeline::on_sample(const ImuSample& sample) {
+  if (sample.sensor_id >= slots_.size()) return;
+  Slot& s = *slots_[sample.sensor_id];
+  if (!s.ring.try_push(sample)) s.drops.fetch_add(1, std::memory_order_relaxed);
+  wake_.notify();
+}
+
+void Pipeline::on_raw(uint16_t device_index, int64_t t_host_ns, std::span<const uint8_t> bytes) {
+  tap_users_.fetch_add(1);
+  if (RecordTap* t = tap_.load()) t->on_raw(device_index, t_host_ns, bytes);
+  tap_users_.fetch_sub(1);
+}
+
+void Pipeline::on_connection(uint16_t device_index, bool connected, std::string_view reason) {
+  if (device_index < device_sensor_.size()) {
+    const int s = device_sensor_[device_index];
+    if (s >= 0 && s < static_cast<int>(slots_.size()))
+      slots_[s]->connected.store(connected ? 1 : 0);
+  }
+  if (!connected)
+    log_.warn("device %u disconnected: %.*s", device_index, static_cast<int>(reason.size()),
+              reason.data());
+}
+
+void Pipeline::set_device_sensor(uint16_t device_index, int sensor) {
+  if (device_index >= device_sensor_.size()) device_sensor_.resize(device_index + 1, -1);
+  device_sensor_[device_index] = sensor;
+}
+
+void Pipeline::calibrate(CalibrationPose pose) {
+  std::lock_guard lock(cmd_mu_);
+  commands_.push_back({Command::calibrate, pose});
+  wake_.notify();
+}
+
+void Pipeline::reset_heading() {
+  std::lock_guard lock(cmd_mu_);
+  commands_.push_back({Command::reset_heading});
+  wake_.notify();
+}
+
+void Pipeline::set_frame_flag(uint32_t flag, bool on) {
+  std::lock_guard lock(cmd_mu_);
+  commands_.push_back({Command::flag, CalibrationPose::npose, flag, on});
+  wake_.notify();
+}
+
+void Pipeline::set_record_tap(RecordTap* tap) {
+  tap_.store(tap);
+  // Wait for callers that may still hold the previous tap.
+  while (tap_users_.load() != 0)
+    std::this_thread::yield();
+}
+
+void Pipeline::set_device_counters(int sensor, uint32_t drops, uint32_t errors) {
+  if (sensor < 0 || sensor >= static_cast<int>(slots_.size())) return;
+  slots_[sensor]->dev_drops.store(drops, std::memory_order_relaxed);
+  slots_[sensor]->dev_errors.store(errors, std::memory_order_relaxed);
+}
+
+PipelineStatus Pipeline::status() const {
+  std::lock_guard lock(status_mu_);
+  return status_;
+}
+
+uint64_t Pipeline::ring_drops() const {
+  uint64_t n = 0;
+  for (const auto& s : slots_)
+    n += s->drops.load(std::memory_order_relaxed);
+  return n;
+}
+
+void Pipeline::TapSink::publish(const PoseFrame& f) {
+  p_.tap_users_.fetch_add(1);
+  if (RecordTap* t = p_.tap_.load()) t->on_frame(f);
+  p_.tap_users_.fetch_sub(1);
+}
+
+void Pipeline::apply_commands(int64_t now_ns) {
+  {
+    std::unique_lock lock(cmd_mu_, std::try_to_lock);
+    if (!lock.owns_lock() || commands_.empty()) return;
+    commands_work_.swap(commands_);
+  }
+  for (const Command& c : commands_work_) {
+    switch (c.kind) {
+      case Command::calibrate:
+        core_.request_calibration(c.pose, now_ns);
+        break;
+      case Command::reset_heading:
+        core_.reset_heading();
+        break;
+      case Command::flag:
+        core_.set_frame_flag(c.flag_bits, c.on);
+        break;
+    }
+  }
+  commands_work_.clear();
+}
+
+void Pipeline::drain() {
+  // Take what each ring holds now, then merge the per-sensor runs by host timestamp.
+  const size_t n = slots_.size();
+  for (size_t i = 0; i < n; ++i) {
+    size_t k = 0;
+    while (k < kRingCapacity && slots_[i]->ring.try_pop(scratch_[i][k]))
+      ++k;
+    scratch_n_[i] = k;
+    scratch_pos_[i] = 0;
+  }
+  for (;;) {
+    int best = -1;
+    int64_t best_t = INT64_MAX;
+    for (size_t i = 0; i < n; ++i) {
+      if (scratch_pos_[i] < scratch_n_[i] && scratch_[i][scratch_pos_[i]].t_host_ns < best_t) {
+        best_t = scratch_[i][scratch_pos_[i]].t_host_ns;
+        best = static_cast<int>(i);
+      }
+    }
+    if (best < 0) break;
+    const ImuSample& s = scratch_[best][scratch_pos_[best]++];
+    tap_users_.fetch_add(1);
+    if (RecordTap* t = tap_.load()) t->on_sample(s);
+    tap_users_.fetch_sub(1);
+    core_.process(s);
+  }
+}
+
+void Pipeline::snapshot() {
+  std::unique_lock lock(status_mu_, std::try_to_lock);
+  if (!lock.owns_lock()) return;  // a status reader holds it: skip, next frame will do
+  status_.frame = core_.last_frame();
+  for (size_t i = 0; i < core_.sensors().size(); ++i)
+    status_.filter[i] = core_.filter_state(static_cast<int>(i));
+  status_.samples = core_.samples_processed();
+  status_.rejected = core_.rejected_samples();
+  status_.ring_drops = ring_drops();
+  status_.frames = core_.last_frame().frame;
+  status_.calibrating = (core_.last_frame().flags & kFrameCalibrating) != 0;
+}
+
+void Pipeline::publish(int64_t now_ns) {
+  for (size_t i = 0; i < slots_.size(); ++i) {
+    const Slot& s = *slots_[i];
+    core_.set_external_counters(static_cast<int>(i),
+                                static_cast<uint32_t>(s.drops.load(std::memory_order_relaxed) +
+                                                      s.dev_drops.load(std::memory_order_relaxed)),
+                                s.dev_errors.load(std::memory_order_relaxed));
+    const int c = s.connected.load(std::memory_order_relaxed);
+    if (c >= 0) core_.set_connected(static_cast<int>(i), c == 1);
+  }
+  core_.publish_frame(now_ns);
+  snapshot();
+}
+
+void Pipeline::run() {
+  // Keep signals for the main thread.
+  sigset_t all;
+  sigfillset(&all);
+  pthread_sigmask(SIG_BLOCK, &all, nullptr);
+  const int64_t period = static_cast<int64_t>(std::llround(1e9 / cfg_.rate_hz));
+  int64_t next_frame = monotonic_ns() + period;
+  while (running_.load(std::memory_order_relaxed)) {
+    wait_until(wake_.fd(), next_frame);
+    wake_.wait(0);  // clear pending notifications
+    const int64_t now = monotonic_ns();
+    apply_commands(now);
+    drain();
+    if (cfg_.publish_every_sample) snapshot();
+    if (now >= next_frame) {
+      publish(now);
+      next_frame += period;
+      if (next_frame < now) next_frame = now + period;  // we fell behind: skip, don't burst
+    }
+  }
+  drain();
+}
+
+}  // namespace mocap::daemon

@@ -1,0 +1,159 @@
+// PipelineCore: drives the engine sample by sample, tracks per-sensor health, runs the
+// calibration countdown and publishes frames. Deterministic given its inputs.
+#include "mocap/daemon/pipeline_core.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace mocap::daemon {
+
+namespace {
+
+bool finite_sample(const ImuSample& s) {
+  return s.gyr_rad_s.allFinite() && s.acc_m_s2.allFinite() && s.mag_uT.allFinite() &&
+         s.q_device_sensor.coeffs().allFinite();
+}
+
+}  // namespace
+
+PipelineCore::PipelineCore(const PipelineConfig& cfg, const CalibrationConfig& calib,
+                           std::vector<SensorInfo> sensors, PoseEngine& engine)
+    : cfg_(cfg),
+      calib_(calib),
+      sensors_(std::move(sensors)),
+      engine_(engine),
+      health_(sensors_.size()),
+      period_ns_(static_cast<int64_t>(std::llround(1e9 / cfg.rate_hz))) {
+  if (sensors_.size() > static_cast<size_t>(kMaxSensors)) sensors_.resize(kMaxSensors);
+  reset_pose(frame_);
+  sinks_.reserve(8);
+}
+
+void PipelineCore::remove_sink(FrameSink* sink) {
+  sinks_.erase(std::remove(sinks_.begin(), sinks_.end(), sink), sinks_.end());
+}
+
+void PipelineCore::process(const ImuSample& s) {
+  if (s.sensor_id >= sensors_.size() || !finite_sample(s)) {
+    ++rejected_;  // NaN never reaches a pose; unknown sensors are ignored
+    return;
+  }
+  const int i = s.sensor_id;
+  Health& h = health_[i];
+  if (h.window_start_ns == INT64_MIN || s.t_host_ns < h.window_start_ns) {
+    h.window_start_ns = s.t_host_ns;
+    h.window_count = 0;
+  }
+  ++h.window_count;
+  const int64_t span = s.t_host_ns - h.window_start_ns;
+  if (span >= 1'000'000'000) {
+    h.rate_hz = static_cast<float>((h.window_count - 1) * 1e9 / static_cast<double>(span));
+    h.window_start_ns = s.t_host_ns;
+    h.window_count = 1;
+  }
+  if (s.flags & kFlagGapBefore) ++h.gaps;
+  h.last_t_ns = std::max(h.last_t_ns, s.t_host_ns);
+  newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
+  if (!h.live) {
+    h.live = true;
+    engine_.set_sensor_live(i, true);
+  }
+  engine_.on_sample(i, s);
+  ++samples_;
+  if (cfg_.publish_every_sample) publish_frame(s.t_host_ns);
+}
+
+void PipelineCore::advance_clock_to(int64_t t_ns) {
+  if (next_frame_ns_ == INT64_MIN) {
+    next_frame_ns_ = t_ns + period_ns_;
+    return;
+  }
+  while (t_ns >= next_frame_ns_) {
+    publish_frame(next_frame_ns_);
+    next_frame_ns_ += period_ns_;
+  }
+}
+
+void PipelineCore::request_calibration(CalibrationPose pose, int64_t t_now_ns) {
+  calibrating_ = true;
+  calib_pose_ = pose;
+  calib_at_ns_ = t_now_ns + static_cast<int64_t>(calib_.countdown_s * 1e9);
+  maybe_finish_calibration(t_now_ns);
+}
+
+void PipelineCore::maybe_finish_calibration(int64_t t_now_ns) {
+  if (calibrating_ && t_now_ns >= calib_at_ns_) {
+    engine_.calibrate(calib_pose_);
+    calibrating_ = false;
+  }
+}
+
+void PipelineCore::set_frame_flag(uint32_t flag, bool on) {
+  extra_flags_ = on ? (extra_flags_ | flag) : (extra_flags_ & ~flag);
+}
+
+void PipelineCore::set_external_counters(int sensor, uint32_t drops, uint32_t errors) {
+  if (sensor < 0 || sensor >= static_cast<int>(health_.size())) return;
+  health_[sensor].drops = drops;
+  health_[sensor].errors = errors;
+}
+
+void PipelineCore::set_connected(int sensor, bool connected) {
+  if (sensor < 0 || sensor >= static_cast<int>(health_.size())) return;
+  health_[sensor].connected = connected;
+}
+
+void PipelineCore::publish_frame(int64_t t_now_ns) {
+  maybe_finish_calibration(t_now_ns);
+  const int64_t stale_ns = static_cast<int64_t>(cfg_.stale_after_ms * 1e6);
+  // Sensors that went silent degrade their segment (the engine infers it from the parent).
+  for (size_t i = 0; i < sensors_.size(); ++i) {
+    Health& h = health_[i];
+    const bool fresh = h.last_t_ns != INT64_MIN && t_now_ns - h.last_t_ns <= stale_ns;
+    if (h.live && !fresh) {
+      h.live = false;
+      engine_.set_sensor_live(static_cast<int>(i), false);
+    }
+  }
+  engine_.build_frame(newest_t_ns_, frame_);
+  frame_.frame = ++frame_no_;
+  frame_.t_ns = newest_t_ns_;
+  frame_.flags = (frame_.flags & kFrameCalibrated) | extra_flags_;
+  if (calibrating_) {
+    frame_.flags |= kFrameCalibrating;
+    frame_.calib_countdown_s =
+        static_cast<float>(std::max<int64_t>(0, calib_at_ns_ - t_now_ns) * 1e-9);
+  } else {
+    frame_.calib_countdown_s = 0;
+  }
+  frame_.sensor_count = static_cast<uint32_t>(sensors_.size());
+  for (size_t i = 0; i < sensors_.size(); ++i) {
+    const Health& h = health_[i];
+    SensorStatus& st = frame_.sensors[i];
+    std::memset(st.name, 0, sizeof st.name);
+    std::strncpy(st.name, sensors_[i].name.c_str(), sizeof st.name - 1);
+    st.segment = static_cast<int8_t>(sensors_[i].segment);
+    const bool has_data = h.last_t_ns != INT64_MIN;
+    st.last_age_ms =
+        has_data ? static_cast<float>(std::max<int64_t>(0, t_now_ns - h.last_t_ns) * 1e-6) : 0.f;
+    if (!has_data)
+      st.state = h.connected ? kConnecting : kAbsent;
+    else
+      st.state = h.live ? kStreaming : kStale;
+    st.rate_hz = h.live ? h.rate_hz : 0.f;
+    st.drops = h.drops + h.gaps;
+    st.errors = h.errors;
+    const SensorFilterState fs = engine_.sensor_state(static_cast<int>(i));
+    st.flags = static_cast<uint16_t>((fs.at_rest ? uint32_t{kSegAtRest} : 0u) |
+                                     (fs.mag_disturbed ? uint32_t{kSegMagDisturbed} : 0u) |
+                                     (h.live ? 0u : uint32_t{kSegStale}));
+    st.gyro_bias_dps = static_cast<float>(fs.gyro_bias_rad_s * 180.0 / M_PI);
+    st.heading_sigma_deg = static_cast<float>(fs.heading_sigma_rad * 180.0 / M_PI);
+    if (sensors_[i].segment >= 0 && !h.live) frame_.segment_flags[sensors_[i].segment] |= kSegStale;
+  }
+  for (FrameSink* s : sinks_)
+    s->publish(frame_);
+}
+
+}  // namespace mocap::daemon

@@ -1,0 +1,236 @@
+// Config loader: defaults, typed reads, file:line:column errors, unknown keys with suggestions,
+// range checks, --set overrides and the --print-config round trip.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "mocap/daemon/config.hpp"
+
+using namespace mocap::daemon;
+
+namespace {
+
+std::optional<Config> parse(const std::string& text, ConfigErrors& errs,
+                            std::vector<std::string> sets = {}) {
+  return parse_config(text, "rig.toml", sets, errs);
+}
+
+const char* kRig = R"(
+[pipeline]
+rate_hz = 200
+
+[[sensor]]
+name = "pelvis"
+driver = "witmotion"
+port = "/dev/ttyUSB0"
+segment = "pelvis"
+
+[[sensor]]
+name = "left_thigh"
+driver = "xbus"
+vid = 0x2639
+pid = 0x0300
+segment = "thigh_l"
+axis_remap = "-y,x,z"
+[sensor.options]
+quat_order = "wxyz"
+)";
+
+}  // namespace
+
+TEST(Config, EmptyFileGivesDefaults) {
+  ConfigErrors errs;
+  auto c = parse("", errs);
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_DOUBLE_EQ(c->pipeline.rate_hz, 120.0);
+  EXPECT_EQ(c->outputs.json.bind, "127.0.0.1");
+  EXPECT_TRUE(c->sensors.empty());
+}
+
+TEST(Config, ReadsSensors) {
+  ConfigErrors errs;
+  auto c = parse(kRig, errs);
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_DOUBLE_EQ(c->pipeline.rate_hz, 200.0);
+  ASSERT_EQ(c->sensors.size(), 2u);
+  EXPECT_EQ(c->sensors[1].vid, 0x2639);
+  EXPECT_EQ(c->sensors[1].segment, "thigh_l");
+  EXPECT_EQ(c->sensors[1].options.at("quat_order"), "wxyz");
+}
+
+TEST(Config, UnknownKeySuggestsNearestWithPosition) {
+  ConfigErrors errs;
+  auto c = parse("[pipeline]\nrate_hx = 100\n", errs);
+  ASSERT_FALSE(c);
+  ASSERT_EQ(errs.errors.size(), 1u);
+  const auto& e = errs.errors[0];
+  EXPECT_EQ(e.file, "rig.toml");
+  EXPECT_EQ(e.line, 2);
+  EXPECT_EQ(e.column, 11);  // toml++ places a key-value pair's source at its value
+  EXPECT_EQ(e.key, "pipeline.rate_hx");
+  EXPECT_NE(e.message.find("did you mean 'rate_hz'"), std::string::npos) << e.message;
+  EXPECT_EQ(e.to_string().rfind("rig.toml:2:", 0), 0u) << e.to_string();
+}
+
+TEST(Config, UnknownSectionAndSegmentSuggestions) {
+  ConfigErrors errs;
+  auto c = parse(
+      "[outptus]\n[[sensor]]\nname=\"a\"\ndriver=\"line\"\nport=\"/dev/x\"\n"
+      "segment=\"thigh_left\"\n",
+      errs);
+  ASSERT_FALSE(c);
+  ASSERT_EQ(errs.errors.size(), 2u) << errs.to_string();
+  std::string all = errs.to_string();
+  EXPECT_NE(all.find("did you mean 'outputs'"), std::string::npos) << all;
+  EXPECT_NE(all.find("sensor[0].segment"), std::string::npos) << all;
+  EXPECT_NE(all.find("rig.toml:6:"), std::string::npos) << all;
+}
+
+TEST(Config, RangeAndTypeChecks) {
+  ConfigErrors errs;
+  auto c = parse(
+      "[pipeline]\nrate_hz = 0\nstale_after_ms = \"x\"\n[outputs.json]\nport = 70000\n"
+      "bind = \"localhost:1\"\n",
+      errs);
+  ASSERT_FALSE(c);
+  std::string all = errs.to_string();
+  EXPECT_EQ(errs.errors.size(), 4u) << all;
+  EXPECT_NE(all.find("pipeline.rate_hz: 0 is out of range"), std::string::npos) << all;
+  EXPECT_NE(all.find("pipeline.stale_after_ms: expected a number"), std::string::npos) << all;
+  EXPECT_NE(all.find("outputs.json.port: 70000 is out of range"), std::string::npos) << all;
+  EXPECT_NE(all.find("not an IPv4 address"), std::string::npos) << all;
+}
+
+TEST(Config, SensorConsistency) {
+  ConfigErrors errs;
+  auto c = parse(R"([[sensor]]
+name = "a"
+driver = "line"
+segment = "head"
+axis_remap = "x,x,z"
+[[sensor]]
+name = "a"
+driver = "line"
+port = "/dev/b"
+vid = 1
+pid = 2
+segment = "head"
+)",
+                 errs);
+  ASSERT_FALSE(c);
+  std::string all = errs.to_string();
+  EXPECT_NE(all.find("needs either port or vid and pid"), std::string::npos) << all;
+  EXPECT_NE(all.find("not a permutation"), std::string::npos) << all;
+  EXPECT_NE(all.find("duplicate sensor name"), std::string::npos) << all;
+  EXPECT_NE(all.find("already has a sensor"), std::string::npos) << all;
+  EXPECT_NE(all.find("not both"), std::string::npos) << all;
+}
+
+TEST(Config, SyntaxErrorHasPosition) {
+  ConfigErrors errs;
+  auto c = parse("[pipeline]\nrate_hz = = 3\n", errs);
+  ASSERT_FALSE(c);
+  ASSERT_EQ(errs.errors.size(), 1u);
+  EXPECT_EQ(errs.errors[0].line, 2);
+  EXPECT_GT(errs.errors[0].column, 0);
+}
+
+TEST(Config, SetOverridesAnyKey) {
+  ConfigErrors errs;
+  auto c = parse(kRig, errs,
+                 {"outputs.json.port=7400", "sensor.pelvis.port=/dev/pts/9", "sensor.1.baud=115200",
+                  "pipeline.publish_every_sample=true", "demo.motion=dance"});
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_EQ(c->outputs.json.port, 7400);
+  EXPECT_EQ(c->sensors[0].port, "/dev/pts/9");
+  EXPECT_EQ(c->sensors[1].baud, 115200);
+  EXPECT_TRUE(c->pipeline.publish_every_sample);
+  EXPECT_EQ(c->demo.motion, "dance");
+}
+
+TEST(Config, SetErrorsAreReported) {
+  ConfigErrors errs;
+  EXPECT_FALSE(parse(kRig, errs, {"outputs.json.prot=1"}));
+  EXPECT_NE(errs.to_string().find("did you mean 'port'"), std::string::npos) << errs.to_string();
+  errs = {};
+  EXPECT_FALSE(parse(kRig, errs, {"sensor.nobody.port=x"}));
+  EXPECT_NE(errs.to_string().find("no sensor 'nobody'"), std::string::npos) << errs.to_string();
+  errs = {};
+  EXPECT_FALSE(parse(kRig, errs, {"noequals"}));
+  errs = {};
+  EXPECT_FALSE(parse(kRig, errs, {"pipeline.rate_hz=abc"}));
+  EXPECT_NE(errs.to_string().find("expected a number"), std::string::npos) << errs.to_string();
+}
+
+TEST(Config, PrintedConfigParsesBackIdentically) {
+  ConfigErrors errs;
+  auto c = parse(kRig, errs);
+  ASSERT_TRUE(c);
+  const std::string printed = config_to_toml(*c);
+  auto c2 = parse_config(printed, "printed", {}, errs);
+  ASSERT_TRUE(c2) << errs.to_string() << printed;
+  const std::string again = config_to_toml(*c2);
+  EXPECT_EQ(again.substr(again.find('\n')), printed.substr(printed.find('\n')));
+  EXPECT_EQ(c2->sensors[1].axis_remap, "-y,x,z");
+}
+
+TEST(Config, ExampleRigsAreValid) {
+  namespace fs = std::filesystem;
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(MOCAP_SOURCE_DIR) / "config")) {
+    if (e.path().extension() != ".toml") continue;
+    ConfigErrors errs;
+    EXPECT_TRUE(load_config(e.path().string(), {}, errs)) << errs.to_string();
+    ++n;
+  }
+  EXPECT_GE(n, 1);
+}
+
+TEST(Config, MissingFile) {
+  ConfigErrors errs;
+  EXPECT_FALSE(load_config("/nonexistent/rig.toml", {}, errs));
+  EXPECT_NE(errs.to_string().find("cannot open"), std::string::npos);
+}
+
+TEST(Config, NearestName) {
+  EXPECT_EQ(edit_distance("kitten", "sitting"), 3);
+  EXPECT_EQ(nearest_name("rate_hx", {"rate_hz", "stale_after_ms"}), "rate_hz");
+  EXPECT_EQ(nearest_name("zzzzzzzz", {"rate_hz"}), "");
+}
+
+TEST(Config, ValidatorsReportAtTheKey) {
+  ConfigValidators v;
+  v.sensor = [](const SensorConfig& s) {
+    return s.driver == "witmotion" ? std::string() : "unknown driver '" + s.driver + "'";
+  };
+  v.filter_param = [](const std::string& name, const std::string&) {
+    return name == "tau_mag_s" ? std::string() : "unknown filter parameter";
+  };
+  v.filter_param_names = {"tau_mag_s", "tau_acc_s"};
+  ConfigErrors errs;
+  auto c = parse_config(
+      "[filter]\ntau_mag_s = 12\nuse_mag = false\n[[sensor]]\nname=\"a\"\n"
+      "driver=\"witmotion\"\nport=\"/dev/x\"\n",
+      "rig.toml", {}, errs, &v);
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_EQ(c->filter.params.at("tau_mag_s"), "12");
+  EXPECT_FALSE(c->filter.use_mag);
+  // Round trip through print-config keeps the filter parameter as a number.
+  auto c2 = parse_config(config_to_toml(*c), "printed", {}, errs, &v);
+  ASSERT_TRUE(c2) << errs.to_string();
+  EXPECT_EQ(c2->filter.params.at("tau_mag_s"), "12");
+
+  c = parse_config(
+      "[filter]\ntau_acc_z = 1.0\n[[sensor]]\nname=\"a\"\ndriver=\"bogus\"\n"
+      "port=\"/dev/x\"\n",
+      "rig.toml", {}, errs, &v);
+  ASSERT_FALSE(c);
+  const std::string all = errs.to_string();
+  EXPECT_NE(all.find("rig.toml:2:13: filter.tau_acc_z: unknown filter parameter (did you mean "
+                     "'tau_acc_s'?)"),
+            std::string::npos)
+      << all;
+  EXPECT_NE(all.find("rig.toml:5:8: sensor[0].driver: unknown driver 'bogus'"), std::string::npos)
+      << all;
+}

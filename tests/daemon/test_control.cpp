@@ -1,0 +1,147 @@
+// Control socket: request grammar, and a real Unix-domain socket server (mode 0600, error
+// replies for malformed/oversized requests, survives them, stale socket replaced).
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "mocap/daemon/control.hpp"
+
+using namespace mocap;
+using namespace mocap::daemon;
+
+namespace {
+
+std::string temp_socket(const char* tag) {
+  return (std::filesystem::temp_directory_path() /
+          ("mocapd-test-" + std::to_string(getpid()) + "-" + tag + ".sock"))
+      .string();
+}
+
+/// Sends raw bytes (no newline added) and returns the reply.
+std::string raw_call(const std::string& path, const std::string& bytes, bool half_close) {
+  int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::strcpy(a.sun_path, path.c_str());
+  EXPECT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  size_t off = 0;
+  while (off < bytes.size()) {
+    ssize_t n = ::send(fd, bytes.data() + off, bytes.size() - off, MSG_NOSIGNAL);
+    if (n <= 0) break;  // the server may close early on an oversized request
+    off += static_cast<size_t>(n);
+  }
+  if (half_close) ::shutdown(fd, SHUT_WR);
+  std::string reply;
+  char buf[1024];
+  ssize_t n;
+  while ((n = ::recv(fd, buf, sizeof buf, 0)) > 0)
+    reply.append(buf, static_cast<size_t>(n));
+  ::close(fd);
+  return reply;
+}
+
+}  // namespace
+
+TEST(ControlProtocol, ParsesCommands) {
+  std::string err;
+  auto r = parse_control_request("status\n", err);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->command, ControlCommand::status);
+  r = parse_control_request("calibrate tpose", err);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->argument, "tpose");
+  r = parse_control_request("record start /tmp/my session.mcap\n", err);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->command, ControlCommand::record_start);
+  EXPECT_EQ(r->argument, "/tmp/my session.mcap");
+  for (const char* s : {"status", "calibrate npose", "reset-heading", "record stop", "quit"}) {
+    auto q = parse_control_request(s, err);
+    ASSERT_TRUE(q) << s;
+    EXPECT_EQ(format_control_request(*q), std::string(s) + "\n");
+  }
+}
+
+TEST(ControlProtocol, RejectsBadRequests) {
+  std::string err;
+  EXPECT_FALSE(parse_control_request("", err));
+  EXPECT_FALSE(parse_control_request("calibrate", err));
+  EXPECT_NE(err.find("usage: calibrate"), std::string::npos);
+  EXPECT_FALSE(parse_control_request("calibrate apose", err));
+  EXPECT_FALSE(parse_control_request("status now", err));
+  EXPECT_FALSE(parse_control_request("record start", err));
+  EXPECT_FALSE(parse_control_request("sudo rm", err));
+  EXPECT_NE(err.find("unknown command 'sudo'"), std::string::npos) << err;
+  EXPECT_FALSE(parse_control_request(std::string("stat\0us", 7), err));
+  EXPECT_FALSE(parse_control_request(std::string(5000, 'a'), err));
+  EXPECT_NE(err.find("too long"), std::string::npos);
+  auto reply = nlohmann::json::parse(control_error_reply("bad \"quote\"\n"));
+  EXPECT_FALSE(reply["ok"].get<bool>());
+  EXPECT_EQ(reply["error"], "bad \"quote\"\n");
+}
+
+TEST(ControlServer, ServesRequestsOverARealSocket) {
+  LogSink sink(stderr);
+  const std::string path = temp_socket("serve");
+  int handled = 0;
+  ControlServer server(
+      path,
+      [&](const ControlRequest& r) {
+        ++handled;
+        return nlohmann::json{{"ok", true}, {"cmd", format_control_request(r)}}.dump();
+      },
+      Logger(sink, "control", LogLevel::error));
+
+  struct stat st {};
+  ASSERT_EQ(::stat(path.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISSOCK(st.st_mode));
+  EXPECT_EQ(st.st_mode & 0777, 0600u);
+
+  auto j = nlohmann::json::parse(control_call(path, "calibrate npose"));
+  EXPECT_TRUE(j["ok"].get<bool>());
+  EXPECT_EQ(j["cmd"], "calibrate npose\n");
+
+  // Malformed, oversized and incomplete requests get error replies; the server keeps going.
+  j = nlohmann::json::parse(control_call(path, "fly away"));
+  EXPECT_FALSE(j["ok"].get<bool>());
+  j = nlohmann::json::parse(raw_call(path, std::string(20000, 'x') + "\n", false));
+  EXPECT_FALSE(j["ok"].get<bool>());
+  EXPECT_NE(j["error"].get<std::string>().find("too long"), std::string::npos);
+  j = nlohmann::json::parse(raw_call(path, "", true));
+  EXPECT_FALSE(j["ok"].get<bool>());
+  j = nlohmann::json::parse(raw_call(path, std::string("\xff\xfe\x01\n"), false));
+  EXPECT_FALSE(j["ok"].get<bool>());
+
+  j = nlohmann::json::parse(control_call(path, "status"));
+  EXPECT_TRUE(j["ok"].get<bool>());
+  EXPECT_EQ(handled, 2);
+  EXPECT_EQ(server.requests_served(), 6u);
+}
+
+TEST(ControlServer, RefusesSecondDaemonAndReplacesStaleSocket) {
+  LogSink sink(stderr);
+  const std::string path = temp_socket("stale");
+  auto handler = [](const ControlRequest&) { return std::string("{\"ok\":true}"); };
+  {
+    ControlServer a(path, handler, Logger(sink, "a", LogLevel::error));
+    EXPECT_THROW(ControlServer(path, handler, Logger(sink, "b", LogLevel::error)),
+                 std::runtime_error);
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));  // removed on shutdown
+  // A socket file left by a crashed daemon: bind one and close it without unlinking.
+  int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::strcpy(a.sun_path, path.c_str());
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ::close(fd);
+  ASSERT_TRUE(std::filesystem::exists(path));
+  ControlServer c(path, handler, Logger(sink, "c", LogLevel::error));
+  EXPECT_EQ(control_call(path, "status"), "{\"ok\":true}");
+  EXPECT_THROW(control_call("/nonexistent/dir/x.sock", "status"), std::runtime_error);
+}

@@ -1,0 +1,103 @@
+// Control client against a real Unix-socket server: request line, replies, errors, timeouts.
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "mocap/viewer/control_client.hpp"
+
+namespace mocap::viewer {
+namespace {
+
+/// A one-connection server: reads one line into `request`, answers `reply` (if not empty).
+class OneShotServer {
+ public:
+  explicit OneShotServer(std::string reply) : reply_(std::move(reply)) {
+    path_ = "/tmp/mocap-viewer-ctl-" + std::to_string(getpid()) + ".sock";
+    unlink(path_.c_str());
+    fd_ = socket(AF_UNIX, SOCK_STREAM, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strcpy(addr.sun_path, path_.c_str());
+    EXPECT_EQ(bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    EXPECT_EQ(listen(fd_, 1), 0);
+    thread_ = std::thread([this] {
+      const int c = accept(fd_, nullptr, nullptr);
+      if (c < 0) return;
+      char ch;
+      while (read(c, &ch, 1) == 1 && ch != '\n')
+        request_ += ch;
+      if (!reply_.empty())
+        EXPECT_GT(write(c, reply_.data(), reply_.size()), 0);
+      else
+        usleep(400000);  // say nothing
+      close(c);
+    });
+  }
+  ~OneShotServer() {
+    thread_.join();
+    close(fd_);
+    unlink(path_.c_str());
+  }
+  const std::string& path() const { return path_; }
+  std::string request() {
+    thread_.join();
+    thread_ = std::thread([] {});
+    return request_;
+  }
+
+ private:
+  std::string reply_, path_, request_;
+  int fd_ = -1;
+  std::thread thread_;
+};
+
+TEST(ControlClient, SendsOneJsonLineAndReadsTheReply) {
+  OneShotServer server("{\"ok\":true,\"message\":\"calibrating in 3 s\"}\n");
+  const ControlReply r = send_control_request(server.path(), calibrate_request("npose"));
+  EXPECT_TRUE(r.ok);
+  EXPECT_EQ(r.message, "calibrating in 3 s");
+  const auto j = nlohmann::json::parse(server.request());
+  EXPECT_EQ(j["cmd"], "calibrate");
+  EXPECT_EQ(j["pose"], "npose");
+}
+
+TEST(ControlClient, DaemonErrorsAreReported) {
+  OneShotServer server("{\"ok\":false,\"error\":\"no sensors streaming\"}\n");
+  const ControlReply r = send_control_request(server.path(), heading_reset_request());
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.message, "no sensors streaming");
+  EXPECT_EQ(nlohmann::json::parse(server.request())["cmd"], "heading_reset");
+}
+
+TEST(ControlClient, GarbageSilenceAndAbsenceAreErrors) {
+  {
+    OneShotServer server("this is not json\n");
+    const ControlReply r = send_control_request(server.path(), heading_reset_request());
+    EXPECT_FALSE(r.ok);
+    EXPECT_NE(r.message.find("not JSON"), std::string::npos) << r.message;
+  }
+  {
+    OneShotServer server("");
+    const ControlReply r = send_control_request(server.path(), heading_reset_request(), 100);
+    EXPECT_FALSE(r.ok);
+    EXPECT_NE(r.message.find("no reply"), std::string::npos) << r.message;
+  }
+  const ControlReply r = send_control_request("/nonexistent/mocapd.sock", heading_reset_request());
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("/nonexistent/mocapd.sock"), std::string::npos) << r.message;
+}
+
+TEST(ControlClient, DefaultPathUsesXdgRuntimeDir) {
+  setenv("XDG_RUNTIME_DIR", "/run/user/4242", 1);
+  EXPECT_EQ(default_control_socket_path(), "/run/user/4242/mocapd.sock");
+  unsetenv("XDG_RUNTIME_DIR");
+  EXPECT_NE(default_control_socket_path().find("mocapd"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mocap::viewer

@@ -1,0 +1,197 @@
+// The real viewer program, rendering under Xvfb + Mesa: known poses published through a real
+// shared posture must appear where the camera projects them, move when the person moves, and
+// show their flags; the HUD shows text and the recording indicator.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <string>
+
+#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/viewer/avatar_geometry.hpp"
+#include "mocap/viewer/camera.hpp"
+#include "mocap/viewer/png_io.hpp"
+#include "mocap/viewer/synthetic_source.hpp"
+
+namespace mocap::viewer {
+namespace {
+
+constexpr int kW = 480, kH = 360;
+
+class Render : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::getenv("DISPLAY")) GTEST_SKIP() << "needs a display: run under xvfb-run";
+    shm_ = "/mocap-viewer-render-" + std::to_string(getpid());
+    png_ = "/tmp/mocap-viewer-render-" + std::to_string(getpid()) + ".png";
+    writer_ = std::make_unique<PostureWriter>(shm_);
+  }
+  void TearDown() override { std::remove(png_.c_str()); }
+
+  /// Runs mocap-viewer with `args`; returns its exit status.
+  static int run(const std::string& args) {
+    const std::string cmd =
+        std::string(MOCAP_VIEWER_EXE) + " " + args + " 2>/tmp/mocap-viewer-render.err";
+    const int rc = std::system(cmd.c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  }
+  /// Renders the published pose without HUD, labels, earth axes or shadows.
+  RgbImage render_published(const PoseFrame& f, const std::string& extra = "") {
+    writer_->publish(f);
+    const std::string size = std::to_string(kW) + "x" + std::to_string(kH);
+    EXPECT_EQ(run("--shm " + shm_ + " --screenshot " + png_ + " --frames 2 --size " + size +
+                  " --no-hud --no-labels --no-earth-axes --no-shadows " + extra),
+              0);
+    return read_png(png_);
+  }
+
+  std::string shm_, png_;
+  std::unique_ptr<PostureWriter> writer_;
+  BodyDimensions dims_ = body_dimensions_from_height(1.75);
+  OrbitCamera camera_ = OrbitCamera::framing(1);
+};
+
+/// Avatar colours are saturated; floor and background are nearly grey.
+bool is_body(const uint8_t* p) {
+  const int hi = std::max({p[0], p[1], p[2]}), lo = std::min({p[0], p[1], p[2]});
+  return hi - lo > 28;
+}
+
+struct Blob {
+  int count = 0;
+  Eigen::Vector2f centroid = Eigen::Vector2f::Zero();
+};
+Blob body_blob(const RgbImage& img) {
+  Blob b;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (is_body(img.at(x, y))) {
+        ++b.count;
+        b.centroid += Eigen::Vector2f(x, y);
+      }
+  if (b.count) b.centroid /= static_cast<float>(b.count);
+  return b;
+}
+
+Eigen::Vector2f projected(const OrbitCamera& c, const PoseFrame& f, const BodyDimensions& d,
+                          Segment s) {
+  return *c.project(segment_midpoint(f, d, index(s)), kW, kH);
+}
+
+const uint8_t* pixel(const RgbImage& img, const Eigen::Vector2f& p) {
+  return img.at(static_cast<int>(p.x()), static_cast<int>(p.y()));
+}
+
+TEST_F(Render, AvatarAppearsWhereTheCameraProjectsIt) {
+  PoseFrame f = reference_pose(dims_, Eigen::Vector3f::Zero());
+  f.flags = kFrameCalibrated;
+  const RgbImage img = render_published(f);
+  ASSERT_EQ(img.width, kW);
+  for (Segment s : {Segment::head, Segment::torso, Segment::pelvis, Segment::thigh_l,
+                    Segment::shank_r, Segment::upper_arm_l, Segment::forearm_r}) {
+    const Eigen::Vector2f p = projected(camera_, f, dims_, s);
+    EXPECT_TRUE(is_body(pixel(img, p))) << name(s) << " at " << p.transpose();
+  }
+  // Background above the head, floor beside the feet, corners: no body.
+  EXPECT_FALSE(is_body(img.at(kW / 2, 5)));
+  EXPECT_FALSE(is_body(pixel(img, *camera_.project(Eigen::Vector3f(0, 1.2f, 0), kW, kH))));
+  EXPECT_FALSE(is_body(img.at(2, kH - 3)));
+  const Blob b = body_blob(img);
+  EXPECT_GT(b.count, kW * kH / 200);
+  EXPECT_LT(b.count, kW * kH / 5);
+  const Eigen::Vector2f centre = projected(camera_, f, dims_, Segment::pelvis);
+  EXPECT_LT((b.centroid - centre).norm(), 0.1f * kW) << b.centroid.transpose();
+}
+
+TEST_F(Render, BlobMovesWithTheAvatar) {
+  PoseFrame here = reference_pose(dims_, Eigen::Vector3f::Zero());
+  PoseFrame there = reference_pose(dims_, Eigen::Vector3f(-0.3f, 0.9f, 0));
+  here.flags = there.flags = kFrameCalibrated;
+  const Blob a = body_blob(render_published(here));
+  const Blob b = body_blob(render_published(there));
+  const Eigen::Vector2f expected = projected(camera_, there, dims_, Segment::pelvis) -
+                                   projected(camera_, here, dims_, Segment::pelvis);
+  const Eigen::Vector2f moved = b.centroid - a.centroid;
+  ASSERT_GT(expected.norm(), 40.0f);
+  EXPECT_LT((moved - expected).norm(), 0.25f * expected.norm())
+      << "moved " << moved.transpose() << " expected " << expected.transpose();
+}
+
+TEST_F(Render, FlaggedSegmentIsTintedRed) {
+  PoseFrame f = reference_pose(dims_, Eigen::Vector3f::Zero());
+  f.flags = kFrameCalibrated;
+  const Eigen::Vector2f thigh = projected(camera_, f, dims_, Segment::thigh_l);
+  const RgbImage plain = render_published(f);
+  f.segment_flags[index(Segment::thigh_l)] = kSegTracked | kSegLimitViolated;
+  const RgbImage flagged = render_published(f);
+  const uint8_t* p = pixel(plain, thigh);
+  const uint8_t* q = pixel(flagged, thigh);
+  EXPECT_GT(p[2], p[0]) << "left thigh is blue normally";
+  EXPECT_GT(q[0], q[1] + 60) << "limit violation is red";
+  EXPECT_GT(q[0], q[2] + 60);
+  // The other thigh keeps its colour.
+  const Eigen::Vector2f other = projected(camera_, f, dims_, Segment::thigh_r);
+  EXPECT_EQ(pixel(plain, other)[0], pixel(flagged, other)[0]);
+}
+
+TEST_F(Render, StickFigureIsThinnerThanSolid) {
+  PoseFrame f = reference_pose(dims_, Eigen::Vector3f::Zero());
+  f.flags = kFrameCalibrated;
+  const Blob solid = body_blob(render_published(f));
+  const Blob stick = body_blob(render_published(f, "--stick"));
+  EXPECT_GT(stick.count, 0);
+  EXPECT_LT(stick.count * 2, solid.count);
+}
+
+TEST_F(Render, HudShowsTextAndRecordingIndicator) {
+  PoseFrame f = reference_pose(dims_, Eigen::Vector3f::Zero());
+  f.flags = kFrameCalibrated | kFrameRecording;
+  writer_->publish(f);
+  auto count = [](const RgbImage& img, int x0, int y0, int x1, int y1, auto pred) {
+    int n = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x)
+        n += pred(img.at(x, y)) ? 1 : 0;
+    return n;
+  };
+  auto white = [](const uint8_t* p) { return p[0] > 200 && p[1] > 200 && p[2] > 200; };
+  auto red = [](const uint8_t* p) { return p[0] > 180 && p[1] < 90 && p[2] < 90; };
+  const std::string args = "--shm " + shm_ + " --screenshot " + png_ + " --frames 2 --size 960x540";
+  ASSERT_EQ(run(args), 0);
+  const RgbImage with = read_png(png_);
+  ASSERT_EQ(run(args + " --no-hud"), 0);
+  const RgbImage without = read_png(png_);
+  EXPECT_GT(count(with, 0, 0, 400, 40, white), 100) << "title and frame rate";
+  EXPECT_EQ(count(without, 0, 0, 400, 40, white), 0);
+  EXPECT_GT(count(with, 800, 0, 960, 40, red), 100) << "REC indicator";
+  EXPECT_EQ(count(without, 800, 0, 960, 40, red), 0);
+}
+
+TEST_F(Render, SyntheticCrowdStandsOnItsGrid) {
+  const int n = 16, frames = 3;
+  ASSERT_EQ(run("--source synthetic --avatars 16 --screenshot " + png_ + " --frames 3 --size " +
+                std::to_string(kW) + "x" + std::to_string(kH) +
+                " --no-hud --no-labels --no-earth-axes --no-shadows"),
+            0);
+  const RgbImage img = read_png(png_);
+  const OrbitCamera cam = OrbitCamera::framing(n);
+  SyntheticSource src(n, dims_);
+  PoseFrame f;
+  for (int i = 0; i < n; ++i) {
+    src.pose_at(i, (frames - 1) / 60.0, f);
+    const auto p = cam.project(segment_midpoint(f, dims_, index(Segment::torso)), kW, kH);
+    ASSERT_TRUE(p);
+    EXPECT_TRUE(is_body(pixel(img, *p))) << "avatar " << i << " at " << p->transpose();
+  }
+}
+
+TEST_F(Render, MissingDaemonAndBadOptionsAreReported) {
+  EXPECT_EQ(run("--shm /mocap-viewer-nobody-here --screenshot " + png_ + " --frames 1"), 3);
+  EXPECT_EQ(run("--avatars 0 --screenshot " + png_), 2);
+  EXPECT_EQ(run("--size 12xfoo --screenshot " + png_), 2);
+  EXPECT_EQ(run("--play /nonexistent.bvh --screenshot " + png_), 1);
+}
+
+}  // namespace
+}  // namespace mocap::viewer

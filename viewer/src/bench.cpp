@@ -1,0 +1,114 @@
+// mocap-viewer --bench: frame rates at the window size with one avatar and with a crowd of 150
+// (synthetic poses, instanced), rendered to the window with vsync off; and the cost of the
+// daemon's posture publish with and without a viewer reading at full speed (wait-free writer).
+#include <unistd.h>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/viewer/gl_util.hpp"
+#include "mocap/viewer/synthetic_source.hpp"
+#include "viewer_options.hpp"
+
+namespace mocap::viewer {
+namespace {
+
+using clock_type = std::chrono::steady_clock;
+
+struct FpsResult {
+  double fps = 0;
+  int frames = 0;
+  size_t capsules = 0;
+};
+
+FpsResult measure_fps(GLFWwindow* window, const ViewerOptions& o, int avatars) {
+  View view(body_dimensions_from_height(o.height_m));
+  view.settings = o.settings;
+  view.camera = OrbitCamera::framing(avatars);
+  SyntheticSource source(avatars, view.dims());
+  auto frame = [&](int i) {
+    source.poll(i / 60.0, view.frames);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    view.render(o.width, o.height);
+    glfwSwapBuffers(window);
+  };
+  for (int i = 0; i < 10; ++i)
+    frame(i);  // warm up (shader compilation, buffers)
+  glFinish();
+  FpsResult r;
+  const auto start = clock_type::now();
+  double elapsed = 0;
+  while (elapsed < o.bench_seconds) {
+    frame(++r.frames);
+    elapsed = std::chrono::duration<double>(clock_type::now() - start).count();
+  }
+  glFinish();
+  elapsed = std::chrono::duration<double>(clock_type::now() - start).count();
+  r.fps = r.frames / elapsed;
+  r.capsules = view.capsule_count();
+  return r;
+}
+
+/// Mean time of PostureWriter::publish over `n` frames, ns, optionally with a reader thread
+/// copying frames as fast as it can (what a viewer does, only harder).
+double publish_ns(const std::string& name, int n, bool with_reader, long& reads) {
+  PostureWriter writer(name);
+  PostureReader reader(name);
+  std::atomic<bool> stop{false};
+  std::atomic<long> read_count{0};
+  std::thread t;
+  if (with_reader) {
+    t = std::thread([&] {
+      PoseFrame f;
+      long k = 0;
+      while (!stop.load(std::memory_order_relaxed))
+        if (reader.read(f)) ++k;
+      read_count = k;
+    });
+  }
+  PoseFrame f;
+  reset_pose(f);
+  const auto start = clock_type::now();
+  for (int i = 0; i < n; ++i) {
+    f.frame = static_cast<uint64_t>(i);
+    writer.publish(f);
+  }
+  const double ns = std::chrono::duration<double, std::nano>(clock_type::now() - start).count();
+  stop = true;
+  if (t.joinable()) t.join();
+  reads = read_count;
+  return ns / n;
+}
+
+}  // namespace
+
+int run_bench(const ViewerOptions& o) {
+  GlfwSession glfw;
+  GLFWwindow* window = create_gl_window(o.width, o.height, true, "mocap-viewer bench");
+  glfwSwapInterval(0);
+  const std::string renderer = gl_renderer_name();
+  const FpsResult one = measure_fps(window, o, 1);
+  const int crowd_n = o.avatars > 1 ? o.avatars : 150;
+  const FpsResult crowd = measure_fps(window, o, crowd_n);
+  glfwDestroyWindow(window);
+
+  const std::string shm = "/mocap-viewer-bench-" + std::to_string(getpid());
+  long reads_alone = 0, reads = 0;
+  const int n = 200000;
+  const double alone_ns = publish_ns(shm, n, false, reads_alone);
+  const double shared_ns = publish_ns(shm, n, true, reads);
+  std::printf(
+      "{\"renderer\": \"%s\", \"width\": %d, \"height\": %d, \"vsync\": false,\n"
+      " \"one_avatar\": {\"fps\": %.1f, \"frames\": %d, \"capsules\": %zu, \"goal_fps\": 120},\n"
+      " \"crowd\": {\"avatars\": %d, \"fps\": %.1f, \"frames\": %d, \"capsules\": %zu, "
+      "\"goal_fps\": 30},\n"
+      " \"posture_publish\": {\"frames\": %d, \"ns_alone\": %.1f, \"ns_with_reader\": %.1f, "
+      "\"ratio\": %.2f, \"reader_frames\": %ld}}\n",
+      renderer.c_str(), o.width, o.height, one.fps, one.frames, one.capsules, crowd_n, crowd.fps,
+      crowd.frames, crowd.capsules, n, alone_ns, shared_ns, shared_ns / alone_ns, reads);
+  return 0;
+}
+
+}  // namespace mocap::viewer

@@ -1,0 +1,45 @@
+// Headless mode: render --frames frames offscreen at a fixed 60 Hz animation clock and write the
+// last one as a PNG (for tests and documentation; runs under Xvfb + Mesa llvmpipe).
+#include <chrono>
+#include <cstdio>
+
+#include "mocap/viewer/gl_util.hpp"
+#include "mocap/viewer/offscreen.hpp"
+#include "viewer_options.hpp"
+
+namespace mocap::viewer {
+
+int run_screenshot(const ViewerOptions& o) {
+  auto source = make_source(o);
+  GlfwSession glfw;
+  GLFWwindow* window = create_gl_window(64, 64, false, "mocap-viewer (headless)");
+  int rc = 0;
+  {
+    Offscreen target(o.width, o.height);
+    View view(body_dimensions_from_height(o.height_m));
+    view.settings = o.settings;
+    view.camera = OrbitCamera::framing(o.avatars);
+    const auto start = std::chrono::steady_clock::now();
+    bool any_pose = false;
+    for (int i = 0; i < o.frames; ++i) {
+      source->poll(static_cast<double>(i) / 60.0, view.frames);
+      any_pose = any_pose || !view.frames.empty();
+      const double wall_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      view.hud.fps = wall_s > 0 ? i / wall_s : 0;
+      view.hud.source = source->status();
+      target.bind();
+      view.render(o.width, o.height);
+    }
+    write_png(o.screenshot, target.read());
+    if (!any_pose) {
+      std::fprintf(stderr, "mocap-viewer: no pose received from %s; the image shows no avatar\n",
+                   source->status().c_str());
+      rc = 3;
+    }
+  }
+  glfwDestroyWindow(window);
+  return rc;
+}
+
+}  // namespace mocap::viewer
