@@ -51,7 +51,9 @@ void set(BodyPose& p, Segment s, const Quaterniond& q) {
   p.q_parent_segment[index(s)] = q;
 }
 
-/// One leg of a walk/step: hip flexion, knee flexion; the ankle keeps the foot level.
+/// One leg: hip flexion, knee flexion; the ankle sets the foot's earth pitch to
+/// `pelvis_pitch_deg` minus that value, i.e. level when the pelvis pitch is passed, toe down by t
+/// when -t is passed with a level pelvis.
 void leg(BodyPose& p, bool left, double hip_deg, double knee_deg, double pelvis_pitch_deg) {
   const Segment thigh = left ? Segment::thigh_l : Segment::thigh_r;
   const Segment shank = left ? Segment::shank_l : Segment::shank_r;
