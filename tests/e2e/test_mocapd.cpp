@@ -240,3 +240,55 @@ TEST(Mocapd, RefusesBadConfigWithPosition) {
   EXPECT_NE(out.find("port = 7555"), std::string::npos) << out;
   fs::remove(f);
 }
+
+// Golden: recorded sessions under tests/data/ replay to their stored expected poses (numeric
+// tolerance: 1e-4 on quaternion components, 1e-3 m on positions). After an intended change,
+// regenerate with scripts/regen-golden.
+TEST(Golden, RecordedSessionsReplayToExpectedPoses) {
+  int checked = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(MOCAP_SOURCE_DIR) / "tests/data")) {
+    if (e.path().extension() != ".mcap") continue;
+    fs::path expected = e.path();
+    expected.replace_extension(".expected.csv");
+    ASSERT_TRUE(fs::exists(expected)) << expected;
+    const std::string got_path =
+        (fs::temp_directory_path() / ("mocap-golden-" + std::to_string(getpid()) + ".csv"))
+            .string();
+    ASSERT_EQ(run({kBin + "mocap", "replay", e.path().string(), "--poses", got_path, "--quiet"}),
+              0);
+    std::ifstream want(expected), got(got_path);
+    std::string lw, lg;
+    int line = 0;
+    double worst_q = 0, worst_p = 0;
+    while (std::getline(want, lw)) {
+      ++line;
+      ASSERT_TRUE(std::getline(got, lg)) << "replay has fewer lines than " << expected;
+      if (line == 1) {
+        EXPECT_EQ(lw, lg);
+        continue;
+      }
+      std::vector<std::string> a, b;
+      std::stringstream sa(lw), sb(lg);
+      std::string cell;
+      while (std::getline(sa, cell, ','))
+        a.push_back(cell);
+      while (std::getline(sb, cell, ','))
+        b.push_back(cell);
+      ASSERT_EQ(a.size(), 9u);
+      ASSERT_EQ(b.size(), 9u);
+      EXPECT_EQ(a[1], b[1]) << "line " << line;
+      EXPECT_NEAR(std::stod(a[0]), std::stod(b[0]), 1e-6) << "line " << line;
+      for (int k = 2; k < 6; ++k)
+        worst_q = std::max(worst_q, std::abs(std::stod(a[k]) - std::stod(b[k])));
+      for (int k = 6; k < 9; ++k)
+        worst_p = std::max(worst_p, std::abs(std::stod(a[k]) - std::stod(b[k])));
+    }
+    EXPECT_FALSE(std::getline(got, lg)) << "replay has more lines than " << expected;
+    EXPECT_LE(worst_q, 1e-4) << e.path();
+    EXPECT_LE(worst_p, 1e-3) << e.path();
+    EXPECT_GT(line, 100);
+    fs::remove(got_path);
+    ++checked;
+  }
+  EXPECT_GE(checked, 1);
+}
