@@ -96,7 +96,7 @@ struct DemoConfig {
   std::string path = "device";         ///< "device" (simulated devices via ptys) or "direct"
   std::string protocol = "witmotion";  ///< wire protocol the simulated devices speak
   double rate_hz = 100.0;
-  std::string motion = "walk";
+  std::string motion = "sequence";  ///< a virtual-performer motion (sim::motion_names())
   uint64_t seed = 1;
 };
 

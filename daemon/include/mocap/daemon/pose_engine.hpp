@@ -7,11 +7,13 @@
 #include <cstdint>
 
 #include "mocap/core/imu_sample.hpp"
+#include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
 namespace mocap::daemon {
 
-enum class CalibrationPose { npose, tpose };
+/// The reference pose of a calibration (the skeleton module's enum).
+using CalibrationPose = mocap::CalibrationPose;
 
 /// What an engine knows about one sensor's filter (for health reports).
 struct SensorFilterState {

@@ -1,0 +1,50 @@
+// The real PoseEngine: one AttitudeFilter per sensor, the skeleton's Calibrator for N-/T-pose
+// captures, and the Skeleton solver (forward kinematics, joint limits, root motion).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "mocap/daemon/config.hpp"
+#include "mocap/daemon/pose_engine.hpp"
+#include "mocap/filter/attitude_filter.hpp"
+#include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/skeleton.hpp"
+
+namespace mocap::daemon {
+
+/// The filter parameters of a config (filter.* keys applied to the defaults).
+FilterParams filter_params(const FilterConfig& f);
+
+class RigEngine final : public PoseEngine {
+ public:
+  /// Builds filters and skeleton for the config's sensors; loads calibration.file if it exists.
+  /// Throws std::runtime_error on an unreadable calibration or body file.
+  explicit RigEngine(const Config& cfg, Logger* log = nullptr);
+
+  void on_sample(int sensor_index, const ImuSample& sample) override;
+  void set_sensor_live(int, bool) override {}
+  void build_frame(int64_t t_ns, PoseFrame& out) override;
+  SensorFilterState sensor_state(int sensor_index) const override;
+  void calibrate(CalibrationPose pose) override;
+  void reset_heading() override;
+
+  /// The outcome of the last calibration capture ("" while none finished).
+  const std::string& last_calibration_message() const { return calib_message_; }
+  Skeleton& skeleton() { return skeleton_; }
+  const AttitudeFilter& filter(int sensor) const { return filters_[sensor]; }
+
+ private:
+  Config cfg_;
+  Logger* log_;
+  std::vector<AttitudeFilter> filters_;
+  std::vector<int> segment_of_;
+  Skeleton skeleton_;
+  Calibrator calibrator_;
+  int64_t newest_t_ns_ = 0;
+  std::string calib_message_;
+};
+
+}  // namespace mocap::daemon

@@ -1,0 +1,132 @@
+// The demo's simulated sensors: Performer -> protocol encoder -> pty (device path), or
+// Performer -> pipeline (direct path), on one thread paced by the wall clock.
+#include "mocap/daemon/demo.hpp"
+
+#include <poll.h>
+#include <signal.h>
+
+#include <atomic>
+#include <cmath>
+#include <thread>
+#include <vector>
+
+#include "mocap/core/time.hpp"
+#include "mocap/drivers/sim_encoder.hpp"
+#include "mocap/sim/performer.hpp"
+
+namespace mocap::daemon {
+
+namespace {
+
+class DemoService final : public Service {
+ public:
+  DemoService(Config& cfg, Logger log) : log_(std::move(log)), direct_(cfg.demo.path == "direct") {
+    sim::PerformerParams p;
+    p.seed = cfg.demo.seed;
+    p.rate_hz = cfg.demo.rate_hz;
+    p.height_m = cfg.body.height_m;
+    p.motion = cfg.demo.motion;
+    p.loop = true;
+    params_ = p;
+    performer_ = std::make_unique<sim::Performer>(p);  // validates the motion name
+    cfg.sensors.clear();
+    for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
+      SensorConfig s;
+      s.name = std::string(sim::Performer::sensor_name(i));
+      s.segment = s.name;
+      s.rate_hz = cfg.demo.rate_hz;
+      if (direct_) {
+        s.driver = "direct";
+        s.port = "demo";
+      } else {
+        EncoderOptions eo;
+        eo.rate_hz = cfg.demo.rate_hz;
+        encoders_.push_back(make_encoder(cfg.demo.protocol, eo));
+        ptys_.push_back(std::make_unique<PtyEndpoint>());
+        s.driver = cfg.demo.protocol;
+        s.port = ptys_.back()->slave_path();
+      }
+      cfg.sensors.push_back(s);
+    }
+    samples_.reserve(4096);
+    bytes_.reserve(1 << 16);
+  }
+  ~DemoService() override { stop(); }
+
+  void start(Pipeline& pipeline) override {
+    pipeline_ = &pipeline;
+    running_ = true;
+    thread_ = std::thread([this] { run(); });
+  }
+  void stop() override {
+    if (!running_.exchange(false)) return;
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  void run() {
+    sigset_t all;
+    sigfillset(&all);
+    pthread_sigmask(SIG_BLOCK, &all, nullptr);
+    // Performer time zero = now: sample host times are the times we emit them.
+    params_.t0_ns = monotonic_ns();
+    performer_ = std::make_unique<sim::Performer>(params_);
+    const int64_t tick = 1'000'000;  // 1 ms: fine-grained enough for 100-1000 Hz sensors
+    int64_t next = params_.t0_ns + tick;
+    uint8_t host_in[256];
+    while (running_) {
+      const int64_t wait = next - monotonic_ns();
+      if (wait > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
+      const int64_t now = monotonic_ns();
+      next += tick;
+      if (next < now) next = now + tick;
+      samples_.clear();
+      performer_->step_to(now, samples_);
+      for (const ImuSample& s : samples_) {
+        if (direct_) {
+          pipeline_->on_sample(s);  // performer times are host monotonic times already
+          continue;
+        }
+        bytes_.clear();
+        encoders_[s.sensor_id]->encode(s, bytes_);
+        if (!bytes_.empty() && !ptys_[s.sensor_id]->write(bytes_)) ++overruns_;
+      }
+      if (!direct_) answer_host_commands(host_in, sizeof host_in);
+    }
+    if (overruns_)
+      log_.warn("demo: %llu writes did not fit a pty (nobody reading)",
+                static_cast<unsigned long long>(overruns_));
+  }
+
+  // Drivers may configure their device (rate, outputs): let each encoder answer.
+  void answer_host_commands(uint8_t* buf, size_t cap) {
+    for (size_t i = 0; i < ptys_.size(); ++i) {
+      const size_t n = ptys_[i]->read(std::span<uint8_t>(buf, cap), 0);
+      if (n == 0) continue;
+      reply_.clear();
+      encoders_[i]->handle_host_bytes(std::span<const uint8_t>(buf, n), reply_);
+      if (!reply_.empty()) ptys_[i]->write(reply_);
+    }
+  }
+
+  Logger log_;
+  bool direct_;
+  sim::PerformerParams params_;
+  std::unique_ptr<sim::Performer> performer_;
+  std::vector<std::unique_ptr<ProtocolEncoder>> encoders_;
+  std::vector<std::unique_ptr<PtyEndpoint>> ptys_;
+  std::vector<ImuSample> samples_;
+  std::vector<uint8_t> bytes_, reply_;
+  Pipeline* pipeline_ = nullptr;
+  std::atomic<bool> running_{false};
+  std::thread thread_;
+  uint64_t overruns_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Service> make_demo(Config& cfg, Logger log) {
+  return std::make_unique<DemoService>(cfg, std::move(log));
+}
+
+}  // namespace mocap::daemon

@@ -1,0 +1,74 @@
+// Builds the configured frame outputs: posture shared memory, JSON/TCP stream, VMC/OSC sender.
+#include "mocap/daemon/outputs.hpp"
+
+#include <stdexcept>
+
+#include "mocap/daemon/json_stream.hpp"
+#include "mocap/daemon/vmc.hpp"
+#include "mocap/skeleton/posture_shm.hpp"
+
+namespace mocap::daemon {
+
+namespace {
+
+class PostureSink final : public FrameSink {
+ public:
+  explicit PostureSink(std::string name) : writer_(std::move(name)) {}
+  void publish(const PoseFrame& f) override { writer_.publish(f); }
+
+ private:
+  PostureWriter writer_;
+};
+
+class JsonSink final : public FrameSink {
+ public:
+  JsonSink(const JsonOutputConfig& c, Logger& log) {
+    PoseJsonServer::Options o;
+    o.bind_address = c.bind;
+    o.port = static_cast<uint16_t>(c.port);
+    std::string err;
+    if (!server_.start(o, &err)) throw std::runtime_error("outputs.json: " + err);
+    log.info("pose JSON stream on %s:%u", c.bind.c_str(), server_.port());
+  }
+  void publish(const PoseFrame& f) override { server_.publish(f); }
+
+ private:
+  PoseJsonServer server_;
+};
+
+class VmcSink final : public FrameSink {
+ public:
+  VmcSink(const VmcOutputConfig& c, Logger& log) {
+    VmcSender::Options o;
+    o.host = c.host;
+    o.port = static_cast<uint16_t>(c.port);
+    std::string err;
+    if (!sender_.open(o, &err)) throw std::runtime_error("outputs.vmc: " + err);
+    log.info("VMC to %s:%d", c.host.c_str(), c.port);
+  }
+  void publish(const PoseFrame& f) override { sender_.publish(f); }
+
+ private:
+  VmcSender sender_;
+};
+
+}  // namespace
+
+std::vector<std::unique_ptr<FrameSink>> make_outputs(const Config& cfg, Logger& log) {
+  std::vector<std::unique_ptr<FrameSink>> out;
+  if (cfg.outputs.posture.enabled) {
+    const std::string name = cfg.outputs.posture.shm_name.empty() ? default_posture_shm_name()
+                                                                  : cfg.outputs.posture.shm_name;
+    try {
+      out.push_back(std::make_unique<PostureSink>(name));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(std::string("outputs.posture: ") + e.what());
+    }
+    log.info("shared posture %s", name.c_str());
+  }
+  if (cfg.outputs.json.enabled) out.push_back(std::make_unique<JsonSink>(cfg.outputs.json, log));
+  if (cfg.outputs.vmc.enabled) out.push_back(std::make_unique<VmcSink>(cfg.outputs.vmc, log));
+  return out;
+}
+
+}  // namespace mocap::daemon

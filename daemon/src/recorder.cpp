@@ -1,0 +1,78 @@
+// SessionRecorder: the daemon's recording, a thin tap over the I/O module's SessionWriter.
+#include "mocap/daemon/recorder.hpp"
+
+#include <ctime>
+#include <stdexcept>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/core/time.hpp"
+
+namespace mocap::daemon {
+
+session::SessionHeader session_header(const Config& cfg, std::string calibration_text) {
+  session::SessionHeader h;
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  h.t_start_unix_ns = static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  h.t_start_host_ns = monotonic_ns();
+  h.config_text = config_to_toml(cfg);
+  h.calibration_text = std::move(calibration_text);
+  for (size_t i = 0; i < cfg.sensors.size(); ++i) {
+    session::SensorDescription d;
+    d.name = cfg.sensors[i].name;
+    d.protocol = cfg.sensors[i].driver;
+    if (auto seg = segment_from_name(cfg.sensors[i].segment)) d.segment = index(*seg);
+    d.device_index = static_cast<uint16_t>(i);
+    h.sensors.push_back(d);
+  }
+  return h;
+}
+
+SessionRecorder::SessionRecorder(Config cfg, std::function<std::string()> calibration_text,
+                                 Logger log)
+    : cfg_(std::move(cfg)), calibration_text_(std::move(calibration_text)), log_(std::move(log)) {}
+
+SessionRecorder::~SessionRecorder() {
+  stop();
+}
+
+RecordTap* SessionRecorder::start(const std::string& path) {
+  if (writer_) throw std::runtime_error("already recording");
+  SessionWriter::Options o;
+  o.on_error = [this](const std::string& msg) { log_.error("recording failed: %s", msg.c_str()); };
+  std::string err;
+  writer_ = SessionWriter::create(
+      path, session_header(cfg_, calibration_text_ ? calibration_text_() : ""), o, &err);
+  if (!writer_) throw std::runtime_error(err);
+  return this;
+}
+
+void SessionRecorder::stop() {
+  if (!writer_) return;
+  if (!writer_->close())
+    log_.error("recording %s: %s", writer_->path().c_str(), writer_->stats().error.c_str());
+  const auto st = writer_->stats();
+  log_.info("recording %s: %llu blocks written, %llu dropped", writer_->path().c_str(),
+            static_cast<unsigned long long>(st.blocks_durable),
+            static_cast<unsigned long long>(st.blocks_dropped));
+  writer_.reset();
+}
+
+std::string SessionRecorder::error() const {
+  if (!writer_) return {};
+  const auto st = writer_->stats();
+  return st.state == SessionWriter::State::failed ? st.error : std::string();
+}
+
+void SessionRecorder::on_raw(uint16_t device_index, int64_t t_host_ns,
+                             std::span<const uint8_t> bytes) {
+  if (cfg_.recording.raw) writer_->append_raw(device_index, t_host_ns, bytes);
+}
+void SessionRecorder::on_sample(const ImuSample& s) {
+  if (cfg_.recording.samples) writer_->append_sample(s);
+}
+void SessionRecorder::on_frame(const PoseFrame& f) {
+  if (cfg_.recording.poses) writer_->append_pose(f);
+}
+
+}  // namespace mocap::daemon

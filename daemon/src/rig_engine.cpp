@@ -1,0 +1,134 @@
+// RigEngine: filter -> calibration -> skeleton for the sensors of a rig config.
+#include "mocap/daemon/rig_engine.hpp"
+
+#include <filesystem>
+#include <stdexcept>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/filter/filter_param_names.hpp"
+#include "mocap/skeleton/body_model.hpp"
+#include "mocap/skeleton/joint_limits.hpp"
+
+namespace mocap::daemon {
+
+namespace {
+
+RigMapping rig_mapping(const Config& cfg) {
+  RigMapping r = RigMapping::none();
+  for (size_t i = 0; i < cfg.sensors.size(); ++i)
+    if (auto seg = segment_from_name(cfg.sensors[i].segment))
+      r.sensor_for_segment[index(*seg)] = static_cast<int>(i);
+  return r;
+}
+
+SkeletonOptions skeleton_options(const Config& cfg) {
+  SkeletonOptions o;
+  o.limit_policy = cfg.body.enforce_limits ? LimitPolicy::clamp : LimitPolicy::report;
+  o.root.pinned = !cfg.body.root_motion;
+  o.stale_after_ns = static_cast<int64_t>(cfg.pipeline.stale_after_ms * 1e6);
+  return o;
+}
+
+CalibratorOptions calibrator_options(const Config& cfg) {
+  CalibratorOptions o;
+  o.capture_s = cfg.calibration.capture_s;
+  return o;
+}
+
+BodyModel body_model(const Config& cfg) {
+  BodyModelConfig b;
+  b.height_m = cfg.body.height_m;
+  return BodyModel(b);
+}
+
+}  // namespace
+
+FilterParams filter_params(const FilterConfig& f) {
+  FilterParams p;
+  for (const auto& [k, v] : f.params) {
+    std::string err;
+    if (!set_filter_param(p, k + "=" + v, err))
+      throw std::invalid_argument("filter." + k + ": " + err);
+  }
+  return p;
+}
+
+RigEngine::RigEngine(const Config& cfg, Logger* log)
+    : cfg_(cfg),
+      log_(log),
+      skeleton_(body_model(cfg), default_joint_limits(), rig_mapping(cfg), skeleton_options(cfg)),
+      calibrator_(rig_mapping(cfg), calibrator_options(cfg)) {
+  const FilterParams fp = filter_params(cfg.filter);
+  filters_.assign(cfg.sensors.size(), AttitudeFilter(fp));
+  for (const auto& s : cfg.sensors) {
+    auto seg = segment_from_name(s.segment);
+    segment_of_.push_back(seg ? index(*seg) : -1);
+  }
+  const std::string& file = cfg.calibration.file;
+  if (!file.empty() && std::filesystem::exists(file)) {
+    skeleton_.set_calibration(load_calibration(file));
+    if (log_) log_->info("calibration loaded from %s", file.c_str());
+  }
+}
+
+void RigEngine::on_sample(int i, const ImuSample& s) {
+  AttitudeFilter& f = filters_[i];
+  f.update(s);
+  newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
+  const int seg = segment_of_[i];
+  if (seg < 0) return;
+  const Eigen::Quaterniond q = cfg_.filter.use_mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();
+  const uint32_t flags = (f.at_rest() ? uint32_t{kSegAtRest} : 0u) |
+                         (f.mag_disturbed() ? uint32_t{kSegMagDisturbed} : 0u);
+  skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags);
+  if (calibrator_.capturing()) {
+    calibrator_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
+    if (calibrator_.done(s.t_host_ns)) {
+      CalibrationResult r = calibrator_.finish();
+      calib_message_ = r.message;
+      if (r.ok()) {
+        skeleton_.set_calibration(r.calibration);
+        if (!cfg_.calibration.file.empty()) {
+          try {
+            save_calibration(r.calibration, cfg_.calibration.file);
+          } catch (const std::exception& e) {
+            if (log_) log_->error("cannot save calibration: %s", e.what());
+          }
+        }
+        if (log_) log_->info("calibration done: %s", r.message.c_str());
+      } else if (log_) {
+        log_->warn("calibration %s: %s",
+                   r.status == CalibrationStatus::need_tpose ? "needs a T-pose next" : "refused",
+                   r.message.c_str());
+      }
+    }
+  }
+}
+
+void RigEngine::build_frame(int64_t, PoseFrame& out) {
+  skeleton_.solve(out);
+}
+
+SensorFilterState RigEngine::sensor_state(int i) const {
+  SensorFilterState st;
+  const AttitudeFilter& f = filters_[i];
+  st.initialised = f.counters().gyr_ok > 0;
+  st.at_rest = f.at_rest();
+  st.mag_disturbed = f.mag_disturbed();
+  st.gyro_bias_rad_s = f.gyro_bias_rad_s().norm();
+  st.heading_sigma_rad = cfg_.filter.use_mag ? f.heading_sigma_rad() : 0.0;
+  const int seg = segment_of_[i];
+  st.calibrated =
+      seg >= 0 && skeleton_.calibration().valid && skeleton_.calibration().calibrated[seg];
+  return st;
+}
+
+void RigEngine::calibrate(CalibrationPose pose) {
+  calibrator_.start(pose, newest_t_ns_);
+}
+
+void RigEngine::reset_heading() {
+  skeleton_.reset_heading();
+}
+
+}  // namespace mocap::daemon
