@@ -187,7 +187,9 @@ TEST_F(Render, SyntheticCrowdStandsOnItsGrid) {
 }
 
 TEST_F(Render, MissingDaemonAndBadOptionsAreReported) {
-  EXPECT_EQ(run("--shm /mocap-viewer-nobody-here --screenshot " + png_ + " --frames 1"), 3);
+  EXPECT_EQ(run("--shm /mocap-viewer-nobody-here --wait 0.3 --screenshot " + png_ + " --frames 1"),
+            3);
+  EXPECT_EQ(run("--connect localhost --screenshot " + png_), 1) << "no port";
   EXPECT_EQ(run("--avatars 0 --screenshot " + png_), 2);
   EXPECT_EQ(run("--size 12xfoo --screenshot " + png_), 2);
   EXPECT_EQ(run("--play /nonexistent.bvh --screenshot " + png_), 1);
