@@ -5,3 +5,12 @@ target_sources(mocap_daemon PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/pose_json.cpp
 )
 target_link_libraries(mocap_daemon PUBLIC ZLIB::ZLIB Threads::Threads)
+target_sources(mocap_daemon PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/src/session.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/session_writer.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/session_reader.cpp
+)
+target_sources(mocap_daemon PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/src/osc.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/vmc.cpp
+)

@@ -83,6 +83,7 @@ constexpr std::string_view kLogLevels[] = {"trace", "debug", "info", "warn", "er
 struct Ctx {
   std::string source;  // file name for nodes without a source
   ConfigErrors& errors;
+  const ConfigValidators* validators = nullptr;
 
   void add(const toml::node* n, const std::string& key, std::string msg) {
     ConfigError e;
@@ -219,6 +220,24 @@ class TableReader {
   std::vector<std::string_view> known_;
 };
 
+/// A scalar's text: strings as they are, numbers and booleans as TOML writes them.
+bool scalar_text(const toml::node& v, std::string& out) {
+  if (v.is_string())
+    out = *v.value<std::string>();
+  else if (v.is_integer())
+    out = std::to_string(*v.value<int64_t>());
+  else if (v.is_floating_point()) {
+    std::ostringstream o;
+    o.precision(17);
+    o << *v.value<double>();
+    out = o.str();
+  } else if (v.is_boolean())
+    out = *v.value<bool>() ? "true" : "false";
+  else
+    return false;
+  return true;
+}
+
 bool valid_axis_remap(std::string_view s) {
   // Three comma-separated axes, each [+|-]x|y|z, a permutation of x, y, z.
   bool seen[3] = {false, false, false};
@@ -247,6 +266,7 @@ bool valid_sensor_name(std::string_view s) {
 
 void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& ctx,
                  SensorConfig& s) {
+  const size_t errors_before = ctx.errors.errors.size();
   TableReader r(&t, where, "sensor[" + std::to_string(index) + "]", ctx);
   r.str("name", s.name);
   r.str("driver", s.driver);
@@ -303,6 +323,10 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
   if (!valid_axis_remap(s.axis_remap))
     ctx.add(at("axis_remap"), p + ".axis_remap",
             "'" + s.axis_remap + "' is not a permutation like \"x,y,z\" or \"-y,x,z\"");
+  if (ctx.errors.errors.size() == errors_before && ctx.validators && ctx.validators->sensor) {
+    if (std::string err = ctx.validators->sensor(s); !err.empty())
+      ctx.add(at("driver"), p + ".driver", err);
+  }
 }
 
 bool valid_ipv4(const std::string& s) {
@@ -326,15 +350,36 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     p.num("stale_after_ms", c.pipeline.stale_after_ms, 10, 60000);
     p.finish();
   }
-  {
-    TableReader f(r.table("filter"), &root, "filter", ctx);
-    f.num("acc_gain", c.filter.acc_gain, 0, 10);
-    f.num("mag_gain", c.filter.mag_gain, 0, 10);
-    f.num("bias_gain", c.filter.bias_gain, 0, 1);
-    f.boolean("use_mag", c.filter.use_mag);
-    f.num("mag_reject_deg", c.filter.mag_reject_deg, 0, 90);
-    f.num("rest_gyr_dps", c.filter.rest_gyr_dps, 0, 100);
-    f.finish();
+  if (const toml::table* ft = r.table("filter")) {
+    // use_mag, plus any FilterParams name (checked by the filter module when validators given).
+    for (const auto& [k, v] : *ft) {
+      const std::string key(k.str());
+      const std::string path = "filter." + key;
+      if (key == "use_mag") {
+        if (!v.is_boolean())
+          ctx.add(&v, path, "expected true or false");
+        else
+          c.filter.use_mag = *v.value<bool>();
+        continue;
+      }
+      std::string text;
+      if (!scalar_text(v, text)) {
+        ctx.add(&v, path, "expected a number or boolean");
+        continue;
+      }
+      if (ctx.validators && ctx.validators->filter_param) {
+        if (std::string err = ctx.validators->filter_param(key, text); !err.empty()) {
+          std::vector<std::string_view> names(ctx.validators->filter_param_names.begin(),
+                                              ctx.validators->filter_param_names.end());
+          names.push_back("use_mag");
+          const std::string near = nearest_name(key, names);
+          ctx.add(&v, path,
+                  err + (near.empty() || near == key ? "" : " (did you mean '" + near + "'?)"));
+          continue;
+        }
+      }
+      c.filter.params[key] = text;
+    }
   }
   {
     TableReader b(r.table("body"), &root, "body", ctx);
@@ -515,9 +560,9 @@ void apply_override(toml::table& root, const std::string& kv, Ctx& ctx) {
 }  // namespace
 
 std::optional<Config> parse_config(std::string_view toml_text, std::string_view source_name,
-                                   const std::vector<std::string>& overrides,
-                                   ConfigErrors& errors) {
-  Ctx ctx{std::string(source_name), errors};
+                                   const std::vector<std::string>& overrides, ConfigErrors& errors,
+                                   const ConfigValidators* validators) {
+  Ctx ctx{std::string(source_name), errors, validators};
   toml::table root;
   try {
     root = toml::parse(toml_text, source_name);
@@ -540,7 +585,8 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
 }
 
 std::optional<Config> load_config(const std::string& path,
-                                  const std::vector<std::string>& overrides, ConfigErrors& errors) {
+                                  const std::vector<std::string>& overrides, ConfigErrors& errors,
+                                  const ConfigValidators* validators) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     errors.errors.push_back({path, 0, 0, "", "cannot open the file"});
@@ -548,7 +594,7 @@ std::optional<Config> load_config(const std::string& path,
   }
   std::ostringstream ss;
   ss << in.rdbuf();
-  return parse_config(ss.str(), path, overrides, errors);
+  return parse_config(ss.str(), path, overrides, errors, validators);
 }
 
 std::string config_to_toml(const Config& c) {
@@ -558,12 +604,19 @@ std::string config_to_toml(const Config& c) {
   root.insert("pipeline", toml::table{{"rate_hz", c.pipeline.rate_hz},
                                       {"publish_every_sample", c.pipeline.publish_every_sample},
                                       {"stale_after_ms", c.pipeline.stale_after_ms}});
-  root.insert("filter", toml::table{{"acc_gain", c.filter.acc_gain},
-                                    {"mag_gain", c.filter.mag_gain},
-                                    {"bias_gain", c.filter.bias_gain},
-                                    {"use_mag", c.filter.use_mag},
-                                    {"mag_reject_deg", c.filter.mag_reject_deg},
-                                    {"rest_gyr_dps", c.filter.rest_gyr_dps}});
+  {
+    toml::table f{{"use_mag", c.filter.use_mag}};
+    for (const auto& [k, v] : c.filter.params) {
+      // Values were numbers or booleans: print them back as such.
+      if (v == "true" || v == "false")
+        f.insert(k, v == "true");
+      else if (v.find_first_of(".eEnN") == std::string::npos)
+        f.insert(k, std::stoll(v));
+      else
+        f.insert(k, std::stod(v));
+    }
+    root.insert("filter", std::move(f));
+  }
   root.insert("body", toml::table{{"height_m", c.body.height_m},
                                   {"enforce_limits", c.body.enforce_limits},
                                   {"root_motion", c.body.root_motion}});

@@ -68,6 +68,8 @@ void Daemon::start() {
   }
   pipeline_->start();
   running_ = true;
+  for (auto& s : parts_.services)
+    s->start(*pipeline_);
   if (parts_.device_factory) {
     for (size_t i = 0; i < cfg_.sensors.size(); ++i) {
       const auto& s = cfg_.sensors[i];

@@ -33,7 +33,9 @@ constexpr std::size_t kMapBytes = sizeof(ShmLayout);
 
 }  // namespace
 
-std::string default_posture_shm_name() { return "/mocap-posture-" + std::to_string(getuid()); }
+std::string default_posture_shm_name() {
+  return "/mocap-posture-" + std::to_string(getuid());
+}
 
 PostureWriter::PostureWriter(std::string name) : name_(std::move(name)) {
   int fd = shm_open(name_.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0600);
@@ -73,7 +75,7 @@ void PostureWriter::publish(const PoseFrame& frame) noexcept {
 PostureReader::PostureReader(std::string name) : name_(std::move(name)) {
   int fd = shm_open(name_.c_str(), O_RDONLY | O_CLOEXEC, 0);
   if (fd < 0) throw std::runtime_error("no shared posture " + name_ + ": " + std::strerror(errno));
-  struct stat st{};
+  struct stat st {};
   if (fstat(fd, &st) != 0 || static_cast<std::size_t>(st.st_size) < kMapBytes) {
     close(fd);
     throw std::runtime_error("shared posture " + name_ + " has the wrong size");

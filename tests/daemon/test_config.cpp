@@ -198,3 +198,39 @@ TEST(Config, NearestName) {
   EXPECT_EQ(nearest_name("rate_hx", {"rate_hz", "stale_after_ms"}), "rate_hz");
   EXPECT_EQ(nearest_name("zzzzzzzz", {"rate_hz"}), "");
 }
+
+TEST(Config, ValidatorsReportAtTheKey) {
+  ConfigValidators v;
+  v.sensor = [](const SensorConfig& s) {
+    return s.driver == "witmotion" ? std::string() : "unknown driver '" + s.driver + "'";
+  };
+  v.filter_param = [](const std::string& name, const std::string&) {
+    return name == "tau_mag_s" ? std::string() : "unknown filter parameter";
+  };
+  v.filter_param_names = {"tau_mag_s", "tau_acc_s"};
+  ConfigErrors errs;
+  auto c = parse_config(
+      "[filter]\ntau_mag_s = 12\nuse_mag = false\n[[sensor]]\nname=\"a\"\n"
+      "driver=\"witmotion\"\nport=\"/dev/x\"\n",
+      "rig.toml", {}, errs, &v);
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_EQ(c->filter.params.at("tau_mag_s"), "12");
+  EXPECT_FALSE(c->filter.use_mag);
+  // Round trip through print-config keeps the filter parameter as a number.
+  auto c2 = parse_config(config_to_toml(*c), "printed", {}, errs, &v);
+  ASSERT_TRUE(c2) << errs.to_string();
+  EXPECT_EQ(c2->filter.params.at("tau_mag_s"), "12");
+
+  c = parse_config(
+      "[filter]\ntau_acc_z = 1.0\n[[sensor]]\nname=\"a\"\ndriver=\"bogus\"\n"
+      "port=\"/dev/x\"\n",
+      "rig.toml", {}, errs, &v);
+  ASSERT_FALSE(c);
+  const std::string all = errs.to_string();
+  EXPECT_NE(all.find("rig.toml:2:13: filter.tau_acc_z: unknown filter parameter (did you mean "
+                     "'tau_acc_s'?)"),
+            std::string::npos)
+      << all;
+  EXPECT_NE(all.find("rig.toml:5:8: sensor[0].driver: unknown driver 'bogus'"), std::string::npos)
+      << all;
+}

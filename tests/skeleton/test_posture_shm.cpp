@@ -24,7 +24,8 @@ TEST(PostureShm, ReaderNeverSeesTornFrames) {
     for (uint64_t i = 1; i <= 20000; ++i) {
       out.frame = i;
       // Every field carries the frame number, so a mix of two frames is detectable.
-      for (auto& q : out.q_earth_segment) q[1] = static_cast<float>(i);
+      for (auto& q : out.q_earth_segment)
+        q[1] = static_cast<float>(i);
       out.joint_violation_deg.back() = static_cast<float>(i);
       writer.publish(out);
     }
@@ -36,7 +37,8 @@ TEST(PostureShm, ReaderNeverSeesTornFrames) {
     ++reads;
     ASSERT_GE(f.frame, last);
     last = f.frame;
-    for (const auto& q : f.q_earth_segment) ASSERT_EQ(q[1], static_cast<float>(f.frame));
+    for (const auto& q : f.q_earth_segment)
+      ASSERT_EQ(q[1], static_cast<float>(f.frame));
     ASSERT_EQ(f.joint_violation_deg.back(), static_cast<float>(f.frame));
   }
   w.join();

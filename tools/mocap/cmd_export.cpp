@@ -1,13 +1,105 @@
-// mocap export: not yet implemented (placeholder replaced by its issue's work).
+// mocap export: converts the poses recorded in a session file (docs/session-format.md) to CSV
+// (t,segment,w,x,y,z,px,py,pz: one row per segment per frame) or BVH. A torn or corrupt tail is
+// reported and everything before it is exported.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <string>
 
 #include "commands.hpp"
+#include "mocap/core/cli_args.hpp"
+#include "mocap/daemon/session_reader.hpp"
 
 namespace mocap::cmd {
+namespace {
 
-int run_export(int, char**) {
-  std::fprintf(stderr, "mocap export: not implemented yet\n");
-  return 2;
+constexpr const char* kUsage =
+    "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh)\n"
+    "Converts the poses recorded in SESSION. CSV columns: t (seconds since the recording\n"
+    "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n";
+
+/// Reports how reading ended; returns false if the session could not be read at all.
+void report_tail(const daemon::SessionReader& r, const std::string& path) {
+  using End = daemon::SessionReader::End;
+  if (r.end() == End::torn)
+    std::fprintf(stderr,
+                 "mocap export: %s: %s; the last %llu bytes (an unfinished write) were "
+                 "ignored\n",
+                 path.c_str(), r.tail_reason().c_str(),
+                 static_cast<unsigned long long>(r.ignored_bytes()));
+  else if (r.end() == End::corrupt)
+    std::fprintf(stderr, "mocap export: %s: damaged: %s; %llu bytes after it were not read\n",
+                 path.c_str(), r.tail_reason().c_str(),
+                 static_cast<unsigned long long>(r.ignored_bytes()));
+}
+
+int export_csv(daemon::SessionReader& r, const std::string& in, const std::string& out) {
+  std::FILE* f = std::fopen(out.c_str(), "w");
+  if (!f) {
+    std::fprintf(stderr, "mocap export: cannot create '%s': %s\n", out.c_str(),
+                 std::strerror(errno));
+    return 1;
+  }
+  std::fprintf(f, "t,segment,w,x,y,z,px,py,pz\n");
+  const int64_t t0 = r.header().t_start_host_ns;
+  daemon::SessionReader::Block b;
+  long frames = 0;
+  while (r.next(b)) {
+    if (b.type != daemon::session::BlockType::pose) continue;
+    const double t = static_cast<double>(b.pose.t_ns - t0) * 1e-9;
+    for (int s = 0; s < kSegmentCount; ++s) {
+      const auto& q = b.pose.q_earth_segment[s];
+      const auto& p = b.pose.p_earth_segment_m[s];
+      std::fprintf(f, "%.6f,%.*s,%.6f,%.6f,%.6f,%.6f,%.5f,%.5f,%.5f\n", t,
+                   static_cast<int>(kSegmentNames[s].size()), kSegmentNames[s].data(), q[0], q[1],
+                   q[2], q[3], p[0], p[1], p[2]);
+    }
+    ++frames;
+  }
+  const bool write_ok = !std::ferror(f);
+  if (std::fclose(f) != 0 || !write_ok) {
+    std::fprintf(stderr, "mocap export: writing '%s' failed: %s\n", out.c_str(),
+                 std::strerror(errno));
+    return 1;
+  }
+  report_tail(r, in);
+  if (frames == 0) {
+    std::fprintf(stderr, "mocap export: %s holds no poses\n", in.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "mocap export: %ld frames -> %s\n", frames, out.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int run_export(int argc, char** argv) {
+  CliArgs args;
+  args.option("csv", "write the poses as CSV to this file")
+      .option("bvh", "write the poses as BVH to this file")
+      .flag("help", "show this help");
+  if (!args.parse(argc, argv, 1)) {
+    std::fprintf(stderr, "mocap export: %s\n%s", args.error().c_str(), kUsage);
+    return 2;
+  }
+  if (args.has("help")) {
+    std::printf("%s%s", kUsage, args.help().c_str());
+    return 0;
+  }
+  if (args.positional().size() != 1 || args.has("csv") == args.has("bvh")) {
+    std::fprintf(stderr, "%s", kUsage);
+    return 2;
+  }
+  const std::string in = args.positional()[0];
+  daemon::SessionReader reader;
+  std::string error;
+  if (!reader.open(in, &error)) {
+    std::fprintf(stderr, "mocap export: %s\n", error.c_str());
+    return 1;
+  }
+  if (args.has("csv")) return export_csv(reader, in, *args.get("csv"));
+  std::fprintf(stderr, "mocap export: --bvh needs the skeleton's BVH writer (not built yet)\n");
+  return 1;
 }
 
 }  // namespace mocap::cmd

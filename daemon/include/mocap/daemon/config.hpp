@@ -3,6 +3,7 @@
 // problem as "file:line:column: key: message", so the daemon never starts half-configured.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -29,14 +30,11 @@ struct SensorConfig {
   std::map<std::string, std::string> options;  ///< protocol options
 };
 
-/// Attitude filter parameters (mapped onto the filter module's FilterParams).
+/// Attitude filter settings: use_mag, plus any parameter of the filter module's FilterParams
+/// by name (e.g. tau_mag_s = 12), kept as text and applied with set_filter_param.
 struct FilterConfig {
-  double acc_gain = 0.02;        ///< accelerometer correction gain (1/s)
-  double mag_gain = 0.01;        ///< magnetometer correction gain (1/s)
-  double bias_gain = 0.001;      ///< gyro bias learning gain (1/s)
-  bool use_mag = true;           ///< use magnetometers for heading when present
-  double mag_reject_deg = 10.0;  ///< dip-angle deviation rejected as a disturbance
-  double rest_gyr_dps = 1.5;     ///< gyro norm below which a sensor may be at rest
+  bool use_mag = true;  ///< 9-D (magnetometer heading) or 6-D orientation
+  std::map<std::string, std::string> params;
 };
 
 struct BodyConfig {
@@ -130,14 +128,26 @@ struct ConfigErrors {
   std::string to_string() const;  ///< one line per error
 };
 
+/// Checks that need other modules (drivers, filter); each returns "" or a message. The loader
+/// reports a message at the offending key's position.
+struct ConfigValidators {
+  std::function<std::string(const SensorConfig&)> sensor;  ///< e.g. unknown driver or option
+  std::function<std::string(const std::string& name, const std::string& value)> filter_param;
+  std::vector<std::string> filter_param_names;  ///< for "did you mean" suggestions
+};
+/// The real checks: drivers' make_decoder and the filter's parameter names.
+const ConfigValidators& default_validators();
+
 /// Parses and validates TOML text. `overrides` are "key.path=VALUE" strings (from --set),
 /// applied before validation; VALUE is a TOML value, or a bare string. Returns the config or
 /// fills `errors` (never a partial config).
 std::optional<Config> parse_config(std::string_view toml_text, std::string_view source_name,
-                                   const std::vector<std::string>& overrides, ConfigErrors& errors);
+                                   const std::vector<std::string>& overrides, ConfigErrors& errors,
+                                   const ConfigValidators* validators = nullptr);
 /// Reads the file, then parse_config.
 std::optional<Config> load_config(const std::string& path,
-                                  const std::vector<std::string>& overrides, ConfigErrors& errors);
+                                  const std::vector<std::string>& overrides, ConfigErrors& errors,
+                                  const ConfigValidators* validators = nullptr);
 /// The effective configuration (defaults included) as TOML text that parse_config accepts.
 std::string config_to_toml(const Config& c);
 

@@ -32,6 +32,15 @@ class Recorder {
   virtual std::string error() const { return {}; }
 };
 
+/// Something running beside the pipeline for the daemon's lifetime (e.g. the demo's simulated
+/// devices). Started before the devices are opened, stopped after they are closed.
+class Service {
+ public:
+  virtual ~Service() = default;
+  virtual void start(Pipeline& pipeline) = 0;
+  virtual void stop() = 0;
+};
+
 /// The sensors of a config as the pipeline sees them.
 std::vector<SensorInfo> sensor_infos(const Config& cfg);
 /// The DeviceSpec of sensor i of a config (its device index and sensor id are i).
@@ -41,10 +50,11 @@ class Daemon {
  public:
   struct Parts {
     std::unique_ptr<PoseEngine> engine;
-    DeviceFactory device_factory;                   ///< null: no devices are opened
-    std::unique_ptr<Recorder> recorder;             ///< null: recording unavailable
-    std::vector<std::unique_ptr<FrameSink>> sinks;  ///< extra outputs (streams, posture)
-    uint32_t frame_flags = 0;                       ///< e.g. kFrameDemo
+    DeviceFactory device_factory;                    ///< null: no devices are opened
+    std::unique_ptr<Recorder> recorder;              ///< null: recording unavailable
+    std::vector<std::unique_ptr<FrameSink>> sinks;   ///< extra outputs (streams, posture)
+    std::vector<std::unique_ptr<Service>> services;  ///< e.g. the demo's simulated devices
+    uint32_t frame_flags = 0;                        ///< e.g. kFrameDemo
   };
   Daemon(Config cfg, Parts parts, Logger log);
   ~Daemon();

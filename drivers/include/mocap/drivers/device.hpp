@@ -34,14 +34,14 @@ class SampleSink {
 
 /// How to reach and decode one device. Parsed from the daemon config; also built by tests.
 struct DeviceSpec {
-  std::string name;       ///< unique name from the rig, e.g. "wt901_left_arm"
-  std::string protocol;   ///< "witmotion", "xbus", "ds4", "dualsense", "joycon", "line", ...
+  std::string name;      ///< unique name from the rig, e.g. "wt901_left_arm"
+  std::string protocol;  ///< "witmotion", "xbus", "ds4", "dualsense", "joycon", "line", ...
   /// Where: a serial path ("/dev/ttyUSB0", "/dev/pts/3"), "usb:VID:PID[:SERIAL]" for a serial
   /// adapter or raw USB device found by ids, "hid:VID:PID[:SERIAL]", or "udp:HOST:PORT" to bind.
   std::string port;
-  int baud = 0;            ///< serial baud (0 = the protocol's default)
-  double rate_hz = 0;      ///< requested output rate (0 = the device's default)
-  uint16_t device_index = 0;  ///< index of this device in the rig (for on_raw/on_connection)
+  int baud = 0;                  ///< serial baud (0 = the protocol's default)
+  double rate_hz = 0;            ///< requested output rate (0 = the device's default)
+  uint16_t device_index = 0;     ///< index of this device in the rig (for on_raw/on_connection)
   uint16_t first_sensor_id = 0;  ///< sensor_id stamped on samples (+ n for multi-sensor devices)
   /// Axis remap applied after unit conversion: sensor axis i = sign * device axis index.
   /// Written like "x,y,z" (identity) or "-y,x,z".

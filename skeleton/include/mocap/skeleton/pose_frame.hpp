@@ -15,14 +15,14 @@ inline constexpr int kMaxSensors = 32;
 
 /// Per-segment state bits (PoseFrame::segment_flags).
 enum SegmentFlag : uint32_t {
-  kSegTracked = 1u << 0,         ///< orientation comes from this segment's own sensor
-  kSegInferred = 1u << 1,        ///< no sensor: follows its parent or is interpolated
-  kSegStale = 1u << 2,           ///< its sensor is silent (last sample too old)
-  kSegMagDisturbed = 1u << 3,    ///< its sensor's magnetometer is rejected as disturbed
-  kSegLimitViolated = 1u << 4,   ///< its joint (to the parent) is outside the limits
-  kSegClamped = 1u << 5,         ///< its joint was clamped to the nearest allowed pose
-  kSegAtRest = 1u << 6,          ///< its sensor is at rest
-  kSegStance = 1u << 7,          ///< foot segments: this foot is the stance foot
+  kSegTracked = 1u << 0,        ///< orientation comes from this segment's own sensor
+  kSegInferred = 1u << 1,       ///< no sensor: follows its parent or is interpolated
+  kSegStale = 1u << 2,          ///< its sensor is silent (last sample too old)
+  kSegMagDisturbed = 1u << 3,   ///< its sensor's magnetometer is rejected as disturbed
+  kSegLimitViolated = 1u << 4,  ///< its joint (to the parent) is outside the limits
+  kSegClamped = 1u << 5,        ///< its joint was clamped to the nearest allowed pose
+  kSegAtRest = 1u << 6,         ///< its sensor is at rest
+  kSegStance = 1u << 7,         ///< foot segments: this foot is the stance foot
 };
 
 /// Whole-frame state bits (PoseFrame::flags).
@@ -51,10 +51,10 @@ struct SensorStatus {
 static_assert(sizeof(SensorStatus) % 8 == 0);
 
 struct PoseFrame {
-  uint64_t frame = 0;         ///< frame number, increasing
-  int64_t t_ns = 0;           ///< host monotonic time the pose refers to (newest sample), ns
-  uint32_t flags = 0;         ///< FrameFlag bits
-  uint32_t sensor_count = 0;  ///< valid entries in sensors
+  uint64_t frame = 0;           ///< frame number, increasing
+  int64_t t_ns = 0;             ///< host monotonic time the pose refers to (newest sample), ns
+  uint32_t flags = 0;           ///< FrameFlag bits
+  uint32_t sensor_count = 0;    ///< valid entries in sensors
   float calib_countdown_s = 0;  ///< seconds until calibration capture (while calibrating)
   float reserved = 0;
   /// Earth-frame (ENU) orientation of each segment, w, x, y, z: maps segment-frame vectors into
@@ -75,8 +75,10 @@ static_assert(sizeof(PoseFrame) % 8 == 0);
 /// Sets every segment to the identity orientation at the origin (a valid "empty" pose).
 inline void reset_pose(PoseFrame& f) {
   f = PoseFrame{};
-  for (auto& q : f.q_earth_segment) q = {1, 0, 0, 0};
-  for (auto& q : f.q_parent_segment) q = {1, 0, 0, 0};
+  for (auto& q : f.q_earth_segment)
+    q = {1, 0, 0, 0};
+  for (auto& q : f.q_parent_segment)
+    q = {1, 0, 0, 0};
 }
 
 }  // namespace mocap

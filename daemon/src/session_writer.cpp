@@ -1,0 +1,249 @@
+// SessionWriter: preallocated ring hand-off from the pipeline to a writer thread that appends
+// the ring to the session file and fdatasync()s it every flush interval; write errors stop the
+// recording cleanly (the torn last block is cut off so the file ends on a whole block).
+#include "mocap/daemon/session_writer.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+namespace mocap::daemon {
+namespace {
+
+/// Writes all of [data, data+len); returns 0 or the errno of the failure, and how much went out.
+int write_all(int fd, const uint8_t* data, std::size_t len, std::size_t& written) {
+  written = 0;
+  while (written < len) {
+    const ssize_t n = ::write(fd, data + written, len - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    if (n == 0) return EIO;
+    written += static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
+/// fdatasync, except that files that cannot be synced (pipes, character devices: EINVAL) are
+/// accepted as they are, so a session can also be recorded into a pipe.
+int sync_fd(int fd) {
+  if (::fdatasync(fd) == 0 || errno == EINVAL) return 0;
+  return errno;
+}
+
+std::string describe(int err) {
+  std::string m = std::strerror(err);
+  if (err == ENOSPC || err == EDQUOT) m += " (disk full)";
+  return m;
+}
+
+}  // namespace
+
+SessionWriter::SessionWriter(std::string path, int fd, Options options, uint64_t header_bytes)
+    : path_(std::move(path)), fd_(fd), options_(std::move(options)) {
+  capacity_ = std::max<std::size_t>(options_.buffer_bytes, 4 * session::kMaxBlockPayload);
+  ring_ = std::make_unique<uint8_t[]>(capacity_);
+  std::memset(ring_.get(), 0, capacity_);  // touch the pages now, not on the pipeline's time
+  bytes_durable_ = header_bytes;
+  if (options_.flush_interval_ms <= 0 || options_.flush_interval_ms > 100)
+    options_.flush_interval_ms = 50;
+}
+
+SessionWriter::~SessionWriter() {
+  close();
+}
+
+std::unique_ptr<SessionWriter> SessionWriter::create(const std::string& path,
+                                                     const session::SessionHeader& header,
+                                                     Options options, std::string* error) {
+  std::vector<uint8_t> bytes;
+  if (!session::encode_file_header(header, bytes, error)) return nullptr;
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    if (error) *error = "cannot create session file '" + path + "': " + describe(errno);
+    return nullptr;
+  }
+  std::size_t written = 0;
+  int err = write_all(fd, bytes.data(), bytes.size(), written);
+  if (!err) err = sync_fd(fd);
+  if (err) {
+    if (error) *error = "cannot write session file '" + path + "': " + describe(err);
+    ::close(fd);
+    return nullptr;
+  }
+  // Make the new directory entry durable too (best effort: some file systems refuse).
+  const auto slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash + 1);
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+  std::unique_ptr<SessionWriter> w(new SessionWriter(path, fd, std::move(options), bytes.size()));
+  w->thread_ = std::thread([p = w.get()] { p->run(); });
+  return w;
+}
+
+bool SessionWriter::append_raw(uint16_t device_index, int64_t t_host_ns,
+                               std::span<const uint8_t> bytes) noexcept {
+  uint8_t prefix[session::kRawPrefixBytes];
+  session::encode_raw_prefix(device_index, t_host_ns, prefix);
+  bool ok = true;
+  do {
+    const std::size_t n = std::min(bytes.size(), session::kMaxRawChunk);
+    ok = append_block(session::BlockType::raw, prefix, sizeof prefix, bytes.data(), n) && ok;
+    bytes = bytes.subspan(n);
+  } while (!bytes.empty());
+  return ok;
+}
+
+bool SessionWriter::append_sample(const ImuSample& sample) noexcept {
+  uint8_t payload[session::kSamplePayloadBytes];
+  session::encode_sample(sample, payload);
+  return append_block(session::BlockType::sample, nullptr, 0, payload, sizeof payload);
+}
+
+bool SessionWriter::append_pose(const PoseFrame& frame) noexcept {
+  uint8_t payload[session::kMaxPosePayload];
+  const std::size_t n = session::encode_pose(frame, payload);
+  return append_block(session::BlockType::pose, nullptr, 0, payload, n);
+}
+
+bool SessionWriter::append_block(session::BlockType type, const uint8_t* prefix,
+                                 std::size_t prefix_len, const uint8_t* body,
+                                 std::size_t body_len) noexcept {
+  const std::size_t payload_len = prefix_len + body_len;
+  uint8_t head[session::kBlockHeaderBytes];
+  session::encode_block_header(type, static_cast<uint32_t>(payload_len), head);
+  uLong crc = crc32(0L, head, sizeof head);
+  if (prefix_len) crc = crc32(crc, prefix, static_cast<uInt>(prefix_len));
+  if (body_len) crc = crc32(crc, body, static_cast<uInt>(body_len));
+  uint8_t tail[session::kBlockTrailerBytes];
+  session::put_u32(tail, static_cast<uint32_t>(crc));
+  const std::size_t total = sizeof head + payload_len + sizeof tail;
+
+  std::lock_guard lock(mutex_);
+  if (state_.load(std::memory_order_relaxed) != State::recording || stop_ ||
+      capacity_ - (head_ - tail_) < total) {
+    ++blocks_dropped_;
+    return false;
+  }
+  auto copy_in = [&](const uint8_t* src, std::size_t len) {
+    const std::size_t pos = head_ % capacity_;
+    const std::size_t first = std::min(len, capacity_ - pos);
+    std::memcpy(ring_.get() + pos, src, first);
+    if (len > first) std::memcpy(ring_.get(), src + first, len - first);
+    head_ += len;
+  };
+  copy_in(head, sizeof head);
+  if (prefix_len) copy_in(prefix, prefix_len);
+  if (body_len) copy_in(body, body_len);
+  copy_in(tail, sizeof tail);
+  ++blocks_appended_;
+  const std::size_t used = static_cast<std::size_t>(head_ - tail_);
+  high_water_ = std::max(high_water_, used);
+  if (used > capacity_ / 2) cv_.notify_one();
+  return true;
+}
+
+void SessionWriter::run() {
+  std::unique_lock lock(mutex_);
+  for (;;) {
+    cv_.wait_for(lock, std::chrono::milliseconds(options_.flush_interval_ms),
+                 [&] { return stop_ || head_ - tail_ > capacity_ / 2; });
+    const uint64_t head = head_, tail = tail_, blocks = blocks_appended_;
+    const bool stopping = stop_;
+    if (head != tail) {
+      lock.unlock();
+      const std::size_t len = static_cast<std::size_t>(head - tail);
+      const std::size_t pos = tail % capacity_;
+      const std::size_t first = std::min(len, capacity_ - pos);
+      std::size_t w1 = 0, w2 = 0;
+      int err = write_all(fd_, ring_.get() + pos, first, w1);
+      if (!err && len > first) err = write_all(fd_, ring_.get(), len - first, w2);
+      const char* what = "cannot write session file";
+      if (!err && (err = sync_fd(fd_)) != 0) what = "cannot sync session file";
+      lock.lock();
+      if (err) {
+        // Keep the whole blocks that did reach the file; cut the torn one off.
+        const std::size_t reached = w1 + w2;
+        std::size_t whole = 0;
+        uint64_t whole_blocks = 0;
+        while (whole + session::kBlockHeaderBytes <= reached) {
+          uint8_t hdr[session::kBlockHeaderBytes];
+          for (std::size_t i = 0; i < sizeof hdr; ++i)
+            hdr[i] = ring_[(pos + whole + i) % capacity_];
+          const std::size_t block =
+              session::kBlockHeaderBytes + session::get_u32(hdr + 4) + session::kBlockTrailerBytes;
+          if (whole + block > reached) break;
+          whole += block;
+          ++whole_blocks;
+        }
+        if (::ftruncate(fd_, static_cast<off_t>(bytes_durable_ + whole)) == 0 &&
+            sync_fd(fd_) == 0) {
+          bytes_durable_ += whole;
+          blocks_durable_ += whole_blocks;
+        }
+        blocks_dropped_ += blocks_appended_ - blocks_durable_;
+        tail_ = head;
+        fail(err, what);
+        break;
+      }
+      tail_ = head;
+      blocks_durable_ = blocks;
+      bytes_durable_ += len;
+      ++flushes_;
+    }
+    if (stopping) break;
+  }
+  if (state_.load() == State::failed && options_.on_error) {
+    const std::string message = error_;
+    lock.unlock();
+    options_.on_error(message);
+  }
+}
+
+void SessionWriter::fail(int err, const char* what) {
+  error_ = std::string("recording stopped: ") + what + " '" + path_ + "': " + describe(err) +
+           "; the " + std::to_string(blocks_durable_) + " blocks (" +
+           std::to_string(bytes_durable_) + " bytes) before it are intact";
+  state_.store(State::failed);
+}
+
+bool SessionWriter::close() {
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  cv_.notify_one();
+  if (thread_.joinable()) thread_.join();
+  if (fd_ >= 0) {
+    ::close(fd_);
+    fd_ = -1;
+  }
+  State expected = State::recording;
+  state_.compare_exchange_strong(expected, State::closed);
+  return state_.load() != State::failed;
+}
+
+SessionWriter::Stats SessionWriter::stats() const {
+  std::lock_guard lock(mutex_);
+  Stats s;
+  s.state = state_.load();
+  s.blocks_appended = blocks_appended_;
+  s.blocks_dropped = blocks_dropped_;
+  s.blocks_durable = blocks_durable_;
+  s.bytes_durable = bytes_durable_;
+  s.flushes = flushes_;
+  s.buffer_high_water = high_water_;
+  s.error = error_;
+  return s;
+}
+
+}  // namespace mocap::daemon

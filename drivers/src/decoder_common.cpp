@@ -1,0 +1,80 @@
+// Shared decoder tail: time mapping, axis remap, NaN guard (see decoder_common.hpp).
+#include "decoder_common.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+
+namespace mocap {
+
+DecoderCommon::DecoderCommon(const DeviceSpec& spec)
+    : sensor_id(spec.first_sensor_id), remap_(AxisRemap::parse(spec.axis_remap)) {}
+
+void DecoderCommon::emit(ImuSample& s, int64_t t_device_ns, int64_t t_read_ns, int64_t dropped,
+                         SampleSink& sink) {
+  bool reset = false;
+  s.t_host_ns = clock_.map(t_device_ns, t_read_ns, reset);
+  s.t_device_ns = t_device_ns;
+  if (reset) {
+    s.flags |= kFlagClockReset;
+    ++stats.clock_resets;
+  }
+  if (dropped > 0) {
+    s.flags |= kFlagGapBefore;
+    stats.dropped_samples += static_cast<uint64_t>(dropped);
+  }
+  seq_ += static_cast<uint32_t>(dropped > 0 ? dropped : 0);
+  finish(s, sink);
+}
+
+void DecoderCommon::emit_untimed(ImuSample& s, int64_t t_read_ns, SampleSink& sink) {
+  if (first_read_ns_ < 0) first_read_ns_ = t_read_ns;
+  s.t_host_ns = t_read_ns;
+  s.t_device_ns = t_read_ns - first_read_ns_;
+  finish(s, sink);
+}
+
+void DecoderCommon::finish(ImuSample& s, SampleSink& sink) {
+  if (!s.gyr_rad_s.allFinite()) s.valid &= ~kFieldGyr;
+  if (!s.acc_m_s2.allFinite()) s.valid &= ~kFieldAcc;
+  if (!s.mag_uT.allFinite()) s.valid &= ~kFieldMag;
+  if (s.has(kFieldQuat)) {
+    const double n = s.q_device_sensor.norm();
+    if (!std::isfinite(n) || n < 0.5 || n > 1.5) {
+      s.valid &= ~kFieldQuat;
+      s.q_device_sensor = Eigen::Quaterniond::Identity();
+    } else {
+      s.q_device_sensor.normalize();
+    }
+  }
+  if (s.valid == 0) return;
+  if (!remap_.identity()) {
+    s.gyr_rad_s = remap_.apply(s.gyr_rad_s);
+    s.acc_m_s2 = remap_.apply(s.acc_m_s2);
+    s.mag_uT = remap_.apply(s.mag_uT);
+    if (s.has(kFieldQuat)) s.q_device_sensor = remap_.apply(s.q_device_sensor);
+  }
+  s.sensor_id = sensor_id;
+  s.seq = seq_++;
+  ++stats.samples;
+  sink.on_sample(s);
+}
+
+double option_double(const DeviceSpec& spec, const char* key, double fallback) {
+  const auto it = spec.options.find(key);
+  if (it == spec.options.end()) return fallback;
+  double v = 0;
+  const auto& str = it->second;
+  const auto r = std::from_chars(str.data(), str.data() + str.size(), v);
+  if (r.ec != std::errc() || r.ptr != str.data() + str.size() || !std::isfinite(v))
+    throw std::invalid_argument("device " + spec.name + ": option " + key + "=\"" + str +
+                                "\" is not a number");
+  return v;
+}
+
+std::string option_string(const DeviceSpec& spec, const char* key, const char* fallback) {
+  const auto it = spec.options.find(key);
+  return it == spec.options.end() ? std::string(fallback) : it->second;
+}
+
+}  // namespace mocap

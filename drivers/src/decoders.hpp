@@ -1,0 +1,16 @@
+// Factories of the per-protocol decoders (internal; the public entry is make_decoder()).
+#pragma once
+
+#include <memory>
+
+#include "decoder_common.hpp"
+
+namespace mocap {
+
+std::unique_ptr<ProtocolDecoder> make_line_decoder(const DeviceSpec& spec);
+std::unique_ptr<ProtocolDecoder> make_witmotion_decoder(const DeviceSpec& spec);
+std::unique_ptr<ProtocolDecoder> make_xbus_decoder(const DeviceSpec& spec);
+std::unique_ptr<ProtocolDecoder> make_playstation_decoder(const DeviceSpec& spec);
+std::unique_ptr<ProtocolDecoder> make_joycon_decoder(const DeviceSpec& spec);
+
+}  // namespace mocap

@@ -1,0 +1,97 @@
+// make_decoder() / make_device(): the protocol table and the choice of transport from the port.
+#include <stdexcept>
+
+#include "mocap/drivers/device.hpp"
+#include "protocols.hpp"
+#include "stream_device.hpp"
+
+namespace mocap {
+
+namespace {
+const ProtocolInfo kProtocols[] = {
+    {"line", ProtocolInfo::kSerial, 115200, 1, make_line_decoder, nullptr},
+    {"witmotion", ProtocolInfo::kSerial, 9600, 1, make_witmotion_decoder, witmotion_setup},
+#ifdef MOCAP_DRIVERS_ALL
+    {"xbus", ProtocolInfo::kSerial, 115200, 2, make_xbus_decoder, xbus_setup},
+    {"ds4", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
+    {"dualsense", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
+    {"joycon", ProtocolInfo::kHid, 0, 1, make_joycon_decoder, joycon_setup},
+#endif
+};
+}  // namespace
+
+const ProtocolInfo* find_protocol(std::string_view name) {
+  for (const auto& p : kProtocols)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+std::string protocol_names() {
+  std::string s;
+  for (const auto& p : kProtocols)
+    s += (s.empty() ? "" : ", ") + std::string(p.name);
+  return s;
+}
+
+static const ProtocolInfo& require_protocol(const DeviceSpec& spec) {
+  const ProtocolInfo* p = find_protocol(spec.protocol);
+  if (!p)
+    throw std::invalid_argument("device " + spec.name + ": unknown protocol \"" + spec.protocol +
+                                "\" (known: " + protocol_names() + ")");
+  return *p;
+}
+
+std::unique_ptr<StreamDecoder> make_decoder(const DeviceSpec& spec) {
+  return require_protocol(spec).make_decoder(spec);
+}
+
+std::unique_ptr<Device> make_device(const DeviceSpec& spec, Logger log) {
+  const ProtocolInfo& info = require_protocol(spec);
+  auto decoder = info.make_decoder(spec);
+  if (spec.port.empty()) throw std::invalid_argument("device " + spec.name + ": no port given");
+  TransportOpener opener;
+  const std::string& port = spec.port;
+  if (port.rfind("udp:", 0) == 0) {
+    const std::string addr = port.substr(4);
+    opener = [addr](std::string& err) { return open_udp(addr, err); };
+  } else if (port.rfind("hid:", 0) == 0) {
+    const std::string ids = port.substr(4);
+    UsbIds parsed;
+    std::string err;
+    if (!parse_usb_ids(ids, parsed, err))
+      throw std::invalid_argument("device " + spec.name + ": " + err);
+    opener = [ids](std::string& e) { return open_hid(ids, e); };
+  } else {
+    if (info.transport == ProtocolInfo::kHid && port.rfind("usb:", 0) != 0)
+      throw std::invalid_argument("device " + spec.name + ": protocol " + spec.protocol +
+                                  " is USB HID; give port as hid:VID:PID[:SERIAL]");
+    SerialOptions opt;
+    opt.port = port;
+    opt.baud = spec.baud > 0 ? spec.baud : info.default_baud;
+    opt.stop_bits = static_cast<int>(option_double(spec, "stop_bits", info.stop_bits));
+    if (opt.stop_bits != 1 && opt.stop_bits != 2)
+      throw std::invalid_argument("device " + spec.name + ": stop_bits must be 1 or 2");
+    if (port.rfind("usb:", 0) == 0) {
+      UsbIds parsed;
+      std::string err;
+      if (!parse_usb_ids(port.substr(4), parsed, err))
+        throw std::invalid_argument("device " + spec.name + ": " + err);
+      // A USB-serial adapter if one matches, else the raw USB device (vendor endpoints).
+      opener = [opt](std::string& e) {
+        auto t = open_serial(opt, e);
+        if (t) return t;
+        std::string e2;
+        t = open_usb(opt.port.substr(4), e2);
+        if (!t) e += "; raw USB: " + e2;
+        return t;
+      };
+    } else {
+      opener = [opt](std::string& e) { return open_serial(opt, e); };
+    }
+  }
+  std::vector<SetupStep> setup = info.setup ? info.setup(spec) : std::vector<SetupStep>{};
+  return std::make_unique<StreamDevice>(spec, std::move(log), std::move(opener), std::move(decoder),
+                                        std::move(setup));
+}
+
+}  // namespace mocap

@@ -1,0 +1,163 @@
+// The per-sensor attitude filter: gyro strapdown + inclination from low-passed acc in an
+// almost-inertial frame + magnetometer heading as a separate scalar, with online gyro-bias
+// estimation, rest detection and magnetic-disturbance rejection (VQF structure, extended).
+// See docs/filter.md for the equations, parameters and measured accuracy.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+
+#include "mocap/core/imu_sample.hpp"
+#include "mocap/filter/lowpass.hpp"
+
+namespace mocap {
+
+/// Tuning, all rate-independent (time constants in seconds, thresholds in physical units).
+/// One parameter set for every sensor and rate; the defaults are the tested ones.
+struct FilterParams {
+  // --- inclination and heading ---
+  double tau_acc_s = 3.0;  ///< low-pass of acc in the almost-inertial frame (inclination)
+  double tau_mag_s = 9.0;  ///< nominal heading time constant in an undisturbed field
+  // --- gyro bias (Kalman filter, sigma values in deg/s) ---
+  bool rest_bias_est = true;             ///< estimate bias while at rest
+  bool motion_bias_est = true;           ///< estimate horizontal bias from inclination corrections
+  double bias_sigma_init_deg_s = 0.5;    ///< initial bias uncertainty
+  double bias_forgetting_time_s = 100;   ///< time for the uncertainty to grow by 0.1 deg/s
+  double bias_clip_deg_s = 2.0;          ///< largest bias estimate and innovation
+  double bias_sigma_motion_deg_s = 0.1;  ///< measurement noise of the motion update
+  double bias_vertical_forgetting = 1e-4;  ///< vertical bias pseudo-measurement weight
+  double bias_sigma_rest_deg_s = 0.03;     ///< measurement noise of the rest update
+  // --- rest detection ---
+  double rest_min_t_s = 1.5;       ///< rest must hold this long
+  double rest_filter_tau_s = 0.5;  ///< low-pass for the rest deviations
+  double rest_th_gyr_deg_s = 2.0;  ///< largest gyro deviation at rest
+  double rest_th_acc_m_s2 = 0.5;   ///< largest acc deviation at rest
+  // --- magnetic disturbance ---
+  bool mag_dist_rejection = true;
+  double mag_current_tau_s = 0.05;      ///< smoothing of the field norm and dip
+  double mag_ref_tau_s = 20.0;          ///< tracking of the reference norm and dip
+  double mag_norm_th = 0.1;             ///< relative norm deviation counted as disturbed
+  double mag_dip_th_deg = 10.0;         ///< dip deviation counted as disturbed
+  double mag_new_time_s = 20.0;         ///< a new consistent field is accepted after this
+  double mag_new_first_time_s = 5.0;    ///< ... or this for the first field
+  double mag_new_min_gyr_deg_s = 20.0;  ///< only while rotating at least this fast
+  double mag_min_undisturbed_time_s = 0.5;
+  double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
+  double mag_rejection_factor = 2.0;       ///< gain divisor after that
+  // --- extensions beyond VQF (false/0 = plain VQF behaviour) ---
+  /// Gyro-consistency test: in a homogeneous field the magnetometer heading seen in the
+  /// gyro-stabilised 6D frame only drifts slowly; RMS wobble of it (about its 1 s mean) above
+  /// this threshold marks the field as disturbed (gradients, hard iron moving with the sensor).
+  /// 0 disables (default: on BROAD it rejected good fields in fast motion and cost accuracy).
+  double mag_consistency_th_deg = 0.0;
+  double mag_consistency_tau_s = 1.0;  ///< averaging window of that test
+  // --- input handling ---
+  double max_gap_s = 0.25;      ///< longer gaps integrate the gyro only over this span
+  double max_gyr_rad_s = 70.0;  ///< |gyr| above this is rejected (about 4000 deg/s)
+  double max_acc_m_s2 = 500.0;  ///< |acc| above this is rejected (about 50 g)
+  double max_mag_uT = 10000.0;  ///< |mag| above this is rejected
+};
+
+/// Per-kind counts of rejected or unusual input.
+struct FilterCounters {
+  uint64_t gyr_ok = 0, acc_ok = 0, mag_ok = 0;
+  uint64_t nonfinite = 0;     ///< NaN or Inf component
+  uint64_t zero_vector = 0;   ///< acc or mag of (near) zero norm
+  uint64_t out_of_range = 0;  ///< absurd magnitude
+  uint64_t bad_time = 0;      ///< timestamp not after the previous one of the same stream
+  uint64_t gaps = 0;          ///< gaps longer than 5 nominal periods
+};
+
+/// Coefficients derived from params and the sampling periods (not saved; recomputed).
+struct FilterCoeffs {
+  double gyr_ts_s = 0, acc_ts_s = 0, mag_ts_s = 0;
+  filt::LowpassCoeffs acc_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
+  double k_mag = 0, k_mag_ref = 0, k_mag_consistency = 0;
+  int bias_decim = 1;           ///< bias KF runs every bias_decim acc samples (about 100 Hz)
+  double bias_ts_s = 0;         ///< its period
+  filt::LowpassCoeffs bias_lp;  ///< tau_acc low-pass at the bias KF rate
+  double bias_p0 = 0, bias_v = 0, bias_motion_w = 0, bias_vertical_w = 0, bias_rest_w = 0;
+  double heading_q_rad2_s = 0, heading_r0_rad2 = 0;
+};
+
+/// Everything that evolves; can be saved and restored (plain data).
+struct FilterState {
+  Eigen::Quaterniond q_gyr = Eigen::Quaterniond::Identity();    ///< sensor -> almost-inertial
+  Eigen::Quaterniond q_acc = Eigen::Quaterniond::Identity();    ///< almost-inertial -> 6D earth
+  double delta_rad = 0;                                         ///< heading offset 6D earth -> ENU
+  Eigen::Quaterniond q_delta = Eigen::Quaterniond::Identity();  ///< rotation by delta_rad
+  double delta_var_rad2 = 10;  ///< heading variance (Kalman heading)
+  bool have_gyr = false, have_acc = false, have_mag = false;
+  int64_t t_gyr_ns = 0, t_acc_ns = 0, t_mag_ns = 0;
+  double gyr_ts_nom_s = 0, acc_ts_nom_s = 0, mag_ts_nom_s = 0;  ///< tracked sampling periods
+  Eigen::Vector3d last_gyr_rad_s = Eigen::Vector3d::Zero();
+  // inclination
+  filt::Lowpass<3> acc_lp;
+  Eigen::Vector3d last_acc_earth = Eigen::Vector3d::UnitZ();
+  // bias
+  Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d bias_p = Eigen::Matrix3d::Zero();  ///< in (0.01 deg/s)^2
+  bool bias_p_init = false;
+  int bias_n = 0;                                           ///< acc samples in this block
+  Eigen::Vector2d bias_corr_sum = Eigen::Vector2d::Zero();  ///< horizontal corrections summed
+  filt::Lowpass<9> motion_r_lp;
+  filt::Lowpass<2> motion_bias_lp;
+  // rest
+  bool rest = false;
+  double rest_t_s = 0;
+  double rest_dev_gyr2 = 0, rest_dev_acc2 = 0;
+  filt::Lowpass<3> rest_gyr_lp, rest_acc_lp;
+  Eigen::Vector3d rest_last_gyr_lp = Eigen::Vector3d::Zero();
+  // magnetometer
+  bool mag_disturbed = true;
+  double k_mag_init = 1.0;
+  double mag_ref_norm = 0, mag_ref_dip = 0;
+  double mag_undisturbed_t_s = 0, mag_reject_t_s = 0;
+  double mag_cand_norm = -1, mag_cand_dip = 0, mag_cand_t_s = 0;
+  filt::Lowpass<2> mag_norm_dip_lp;
+  double mag_norm_dip[2] = {0, 0};
+  double mag_err_mean_rad = 0, mag_err_var_rad2 = 0;  ///< consistency test state
+  bool mag_err_init = false;
+};
+
+/// Quaternion attitude filter for one sensor. Allocation-free update.
+class AttitudeFilter {
+ public:
+  explicit AttitudeFilter(const FilterParams& p = {});
+
+  /// Feeds one sample; gyr/acc/mag are used according to s.valid and may arrive in separate
+  /// samples at different rates. Periods come from s.t_host_ns per stream.
+  void update(const ImuSample& s);
+
+  /// 9D orientation (sensor -> ENU) once a magnetometer sample was accepted, else 6D.
+  Eigen::Quaterniond q_earth_sensor() const;
+  /// 6D orientation (sensor -> a z-up frame with arbitrary but slowly drifting heading).
+  Eigen::Quaterniond q_earth_sensor_6d() const;
+  bool at_rest() const { return st_.rest; }
+  bool mag_disturbed() const { return st_.have_mag && st_.mag_disturbed; }
+  Eigen::Vector3d gyro_bias_rad_s() const { return st_.bias_rad_s; }
+  /// One-sigma heading uncertainty of the 9D output, rad (large before any magnetometer).
+  double heading_sigma_rad() const;
+
+  FilterState state() const { return st_; }
+  void set_state(const FilterState& s);
+  const FilterCounters& counters() const { return cnt_; }
+  const FilterParams& params() const { return p_; }
+  void reset();
+
+ private:
+  void update_gyr(const Eigen::Vector3d& gyr, double dt_s);
+  void update_acc(const Eigen::Vector3d& acc, double dt_s);
+  void update_mag(const Eigen::Vector3d& mag, double dt_s);
+  void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
+  bool stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double& ts_nom, double& dt_s);
+  void refresh_coeffs();
+
+  FilterParams p_;
+  FilterCoeffs c_;
+  FilterState st_;
+  FilterCounters cnt_;
+};
+
+}  // namespace mocap

@@ -1,0 +1,85 @@
+// Second-order Butterworth low-pass for N channels with a mean-of-first-tau start-up, the
+// building block of the attitude filter's slow paths. Plain data so filter state can be saved.
+#pragma once
+
+#include <array>
+#include <cmath>
+
+namespace mocap::filt {
+
+/// Biquad coefficients (direct form II transposed). Pass-through when tau <= 0 or the cut-off
+/// is too close to Nyquist to be realised.
+struct LowpassCoeffs {
+  double b0 = 1, b1 = 0, b2 = 0, a1 = 0, a2 = 0;
+  bool pass = true;
+};
+
+/// Butterworth with cut-off f_c = sqrt(2) / (2 pi tau_s), sampled every ts_s.
+inline LowpassCoeffs butterworth(double tau_s, double ts_s) {
+  LowpassCoeffs c;
+  if (!(tau_s > 0) || !(ts_s > 0)) return c;
+  constexpr double kPi = 3.14159265358979323846;
+  const double fc_hz = std::sqrt(2.0) / (2.0 * kPi * tau_s);
+  if (fc_hz * ts_s >= 0.45) return c;  // near Nyquist: behave as pass-through
+  const double k = std::tan(kPi * fc_hz * ts_s);
+  const double d = k * k + std::sqrt(2.0) * k + 1.0;
+  c.b0 = k * k / d;
+  c.b1 = 2.0 * c.b0;
+  c.b2 = c.b0;
+  c.a1 = 2.0 * (k * k - 1.0) / d;
+  c.a2 = (1.0 - std::sqrt(2.0) * k + k * k) / d;
+  c.pass = false;
+  return c;
+}
+
+/// First-order gain for a time constant: 1 - exp(-ts/tau); 1 when tau == 0, 0 when tau < 0.
+inline double gain_from_tau(double tau_s, double ts_s) {
+  if (tau_s < 0) return 0.0;
+  if (tau_s == 0) return 1.0;
+  return 1.0 - std::exp(-ts_s / tau_s);
+}
+
+/// N-channel Butterworth state. Until tau_s of input has been seen the output is the running
+/// mean, and the filter then starts in steady state at that mean (no start-up transient).
+template <int N>
+struct Lowpass {
+  std::array<double, N> s0{}, s1{}, out{};
+  double init_t_s = 0;  ///< time accumulated during start-up; < 0 once running
+  int init_n = 0;
+
+  void reset() { *this = Lowpass{}; }
+
+  const std::array<double, N>& step(const double* x, const LowpassCoeffs& c, double tau_s,
+                                    double ts_s) {
+    if (c.pass) {
+      for (int i = 0; i < N; ++i)
+        out[i] = x[i];
+      return out;
+    }
+    if (init_t_s >= 0) {
+      ++init_n;
+      for (int i = 0; i < N; ++i) {
+        s0[i] += x[i];  // running sum during start-up
+        out[i] = s0[i] / init_n;
+      }
+      init_t_s += ts_s;
+      if (init_t_s >= tau_s) {
+        for (int i = 0; i < N; ++i) {
+          s0[i] = out[i] * (1.0 - c.b0);
+          s1[i] = out[i] * (c.b2 - c.a2);
+        }
+        init_t_s = -1;
+      }
+      return out;
+    }
+    for (int i = 0; i < N; ++i) {
+      const double y = c.b0 * x[i] + s0[i];
+      s0[i] = c.b1 * x[i] - c.a1 * y + s1[i];
+      s1[i] = c.b2 * x[i] - c.a2 * y;
+      out[i] = y;
+    }
+    return out;
+  }
+};
+
+}  // namespace mocap::filt

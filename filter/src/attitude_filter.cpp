@@ -1,0 +1,370 @@
+// AttitudeFilter: strapdown + almost-inertial acc low-pass + scalar heading, with bias Kalman
+// filter, rest detection and magnetic-disturbance handling. Equations in docs/filter.md.
+#include "mocap/filter/attitude_filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "mocap/filter/input_check.hpp"
+
+namespace mocap {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+double wrap_pi(double a) {
+  if (a > kPi) a -= 2 * kPi;
+  if (a < -kPi) a += 2 * kPi;
+  if (!(std::abs(a) <= kPi)) a = std::remainder(a, 2 * kPi);
+  return a;
+}
+
+Eigen::Quaterniond heading_quat(double delta_rad) {
+  return Eigen::Quaterniond(std::cos(delta_rad / 2), 0, 0, std::sin(delta_rad / 2));
+}
+
+}  // namespace
+
+AttitudeFilter::AttitudeFilter(const FilterParams& p) : p_(p) {
+  reset();
+}
+
+void AttitudeFilter::reset() {
+  st_ = FilterState{};
+  cnt_ = FilterCounters{};
+  c_ = FilterCoeffs{};
+  refresh_coeffs();
+}
+
+void AttitudeFilter::set_state(const FilterState& s) {
+  st_ = s;
+  refresh_coeffs();
+}
+
+void AttitudeFilter::refresh_coeffs() {
+  // Sampling periods: tracked per stream; before a stream's second sample borrow another's.
+  const double fallback = st_.gyr_ts_nom_s > 0   ? st_.gyr_ts_nom_s
+                          : st_.acc_ts_nom_s > 0 ? st_.acc_ts_nom_s
+                                                 : 0.01;
+  c_.gyr_ts_s = st_.gyr_ts_nom_s > 0 ? st_.gyr_ts_nom_s : fallback;
+  c_.acc_ts_s = st_.acc_ts_nom_s > 0 ? st_.acc_ts_nom_s : c_.gyr_ts_s;
+  c_.mag_ts_s = st_.mag_ts_nom_s > 0 ? st_.mag_ts_nom_s : c_.acc_ts_s;
+
+  c_.acc_lp = filt::butterworth(p_.tau_acc_s, c_.acc_ts_s);
+  c_.rest_gyr_lp = filt::butterworth(p_.rest_filter_tau_s, c_.gyr_ts_s);
+  c_.rest_acc_lp = filt::butterworth(p_.rest_filter_tau_s, c_.acc_ts_s);
+  c_.mag_norm_dip_lp = filt::butterworth(p_.mag_current_tau_s, c_.mag_ts_s);
+  c_.k_mag = filt::gain_from_tau(p_.tau_mag_s, c_.mag_ts_s);
+  c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
+  c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
+
+  // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
+  c_.bias_decim = std::max(1, static_cast<int>(std::lround(0.01 / c_.acc_ts_s)));
+  c_.bias_ts_s = c_.bias_decim * c_.acc_ts_s;
+  c_.bias_lp = filt::butterworth(p_.tau_acc_s, c_.bias_ts_s);
+  // Bias KF in units of (0.01 deg/s)^2: uncertainty grows by 0.1 deg/s per forgetting time.
+  auto sq = [](double x) { return x * x; };
+  c_.bias_p0 = sq(p_.bias_sigma_init_deg_s * 100.0);
+  c_.bias_v = sq(0.1 * 100.0) * c_.bias_ts_s / p_.bias_forgetting_time_s;
+  const double p_motion = sq(p_.bias_sigma_motion_deg_s * 100.0);
+  c_.bias_motion_w = sq(p_motion) / c_.bias_v + p_motion;
+  c_.bias_vertical_w = c_.bias_motion_w / std::max(p_.bias_vertical_forgetting, 1e-10);
+  const double p_rest = sq(p_.bias_sigma_rest_deg_s * 100.0);
+  c_.bias_rest_w = sq(p_rest) / c_.bias_v + p_rest;
+}
+
+// Period of one stream from its timestamps. Returns false (and counts) for a timestamp that
+// does not advance. dt_s is 0 for a stream's first sample.
+bool AttitudeFilter::stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double& ts_nom,
+                               double& dt_s) {
+  if (!have) {
+    have = true;
+    t_last = t_ns;
+    dt_s = 0;
+    return true;
+  }
+  if (t_ns <= t_last) {
+    ++cnt_.bad_time;
+    return false;
+  }
+  dt_s = static_cast<double>(t_ns - t_last) * 1e-9;
+  t_last = t_ns;
+  if (ts_nom <= 0) {
+    ts_nom = dt_s;
+    refresh_coeffs();
+    return true;
+  }
+  // Track the nominal period: small jitter by averaging; a genuinely different rate by
+  // steady drift; gaps (> 5 periods) are counted and leave the period alone.
+  if (dt_s < 2 * ts_nom && dt_s > 0.5 * ts_nom)
+    ts_nom += 0.02 * (dt_s - ts_nom);
+  else if (dt_s <= 0.5 * ts_nom)
+    ts_nom *= 0.95;
+  else if (dt_s <= 5 * ts_nom)
+    ts_nom *= 1.02;
+  else
+    ++cnt_.gaps;
+  // Re-derive coefficients when a tracked period moved more than 2 % from the one in use.
+  if (std::abs(st_.gyr_ts_nom_s - c_.gyr_ts_s) > 0.02 * c_.gyr_ts_s ||
+      std::abs(st_.acc_ts_nom_s - c_.acc_ts_s) > 0.02 * c_.acc_ts_s ||
+      std::abs(st_.mag_ts_nom_s - c_.mag_ts_s) > 0.02 * c_.mag_ts_s)
+    refresh_coeffs();
+  return true;
+}
+
+void AttitudeFilter::update(const ImuSample& s) {
+  double dt_s = 0;
+  if (s.has(kFieldGyr)) {
+    if (filt::check_vector(s.gyr_rad_s, 0.0, p_.max_gyr_rad_s, cnt_) &&
+        stream_dt(s.t_host_ns, st_.have_gyr, st_.t_gyr_ns, st_.gyr_ts_nom_s, dt_s)) {
+      ++cnt_.gyr_ok;
+      update_gyr(s.gyr_rad_s, dt_s);
+    }
+  }
+  if (s.has(kFieldAcc)) {
+    if (filt::check_vector(s.acc_m_s2, 1e-3, p_.max_acc_m_s2, cnt_) &&
+        stream_dt(s.t_host_ns, st_.have_acc, st_.t_acc_ns, st_.acc_ts_nom_s, dt_s)) {
+      ++cnt_.acc_ok;
+      update_acc(s.acc_m_s2, dt_s);
+    }
+  }
+  if (s.has(kFieldMag)) {
+    if (filt::check_vector(s.mag_uT, 1e-6, p_.max_mag_uT, cnt_) &&
+        stream_dt(s.t_host_ns, st_.have_mag, st_.t_mag_ns, st_.mag_ts_nom_s, dt_s)) {
+      ++cnt_.mag_ok;
+      update_mag(s.mag_uT, dt_s);
+    }
+  }
+}
+
+void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
+  // Rest detection, gyro part: deviation from the low-passed rate.
+  const double ts = c_.gyr_ts_s;
+  const auto& lp = st_.rest_gyr_lp.step(gyr.data(), c_.rest_gyr_lp, p_.rest_filter_tau_s, ts);
+  st_.rest_last_gyr_lp = Eigen::Vector3d(lp[0], lp[1], lp[2]);
+  st_.rest_dev_gyr2 = (gyr - st_.rest_last_gyr_lp).squaredNorm();
+  const double clip = p_.bias_clip_deg_s * kDeg;
+  if (st_.rest_dev_gyr2 >= (p_.rest_th_gyr_deg_s * kDeg) * (p_.rest_th_gyr_deg_s * kDeg) ||
+      st_.rest_last_gyr_lp.cwiseAbs().maxCoeff() > clip) {
+    st_.rest_t_s = 0;
+    st_.rest = false;
+  }
+  st_.last_gyr_rad_s = gyr;
+  if (dt_s <= 0) return;  // first sample: nothing to integrate yet
+  const double t = std::min(dt_s, p_.max_gap_s);
+  // Exact quaternion exponential of the bias-corrected rate held over the period.
+  const Eigen::Vector3d w = gyr - st_.bias_rad_s;
+  const double n = w.norm();
+  const double angle = n * t;
+  if (angle > 1e-12) {
+    const double c = std::cos(angle / 2), sn = std::sin(angle / 2) / n;
+    const Eigen::Quaterniond dq(c, sn * w.x(), sn * w.y(), sn * w.z());
+    st_.q_gyr = st_.q_gyr * dq;
+    st_.q_gyr.normalize();
+  }
+  // Heading uncertainty grows with the bias uncertainty (about the vertical) over time.
+  const double sb_rad_s = std::sqrt(std::max(st_.bias_p(2, 2), 0.0)) * 0.01 * kDeg;
+  st_.delta_var_rad2 += sb_rad_s * sb_rad_s * t + 1e-7 * t;
+}
+
+void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
+  (void)dt_s;
+  const double ts = c_.acc_ts_s;
+  // Rest detection, acc part.
+  const auto& alp = st_.rest_acc_lp.step(acc.data(), c_.rest_acc_lp, p_.rest_filter_tau_s, ts);
+  st_.rest_dev_acc2 = (acc - Eigen::Vector3d(alp[0], alp[1], alp[2])).squaredNorm();
+  const double thg = p_.rest_th_gyr_deg_s * kDeg, tha = p_.rest_th_acc_m_s2;
+  if (st_.rest_dev_gyr2 >= thg * thg || st_.rest_dev_acc2 >= tha * tha ||
+      st_.rest_last_gyr_lp.cwiseAbs().maxCoeff() > p_.bias_clip_deg_s * kDeg) {
+    st_.rest_t_s = 0;
+    st_.rest = false;
+  } else {
+    st_.rest_t_s += ts;
+    if (st_.rest_t_s >= p_.rest_min_t_s) st_.rest = true;
+  }
+
+  // Acc into the almost-inertial frame, low-pass, then into the 6D earth frame.
+  const Eigen::Vector3d acc_i = st_.q_gyr * acc;
+  const auto& f = st_.acc_lp.step(acc_i.data(), c_.acc_lp, p_.tau_acc_s, ts);
+  Eigen::Vector3d acc_e = st_.q_acc * Eigen::Vector3d(f[0], f[1], f[2]);
+  const double an = acc_e.norm();
+  if (!(an > 1e-9)) return;
+  acc_e /= an;
+  st_.last_acc_earth = acc_e;
+  // Shortest rotation taking acc_e onto +z, applied fully.
+  const double qw = std::sqrt(std::max((acc_e.z() + 1.0) / 2.0, 0.0));
+  Eigen::Quaterniond qc;
+  if (qw > 1e-6)
+    qc = Eigen::Quaterniond(qw, 0.5 * acc_e.y() / qw, -0.5 * acc_e.x() / qw, 0);
+  else
+    qc = Eigen::Quaterniond(0, 1, 0, 0);
+  st_.q_acc = qc * st_.q_acc;
+  st_.q_acc.normalize();
+
+  st_.bias_corr_sum += acc_e.head<2>();
+  if (++st_.bias_n >= c_.bias_decim) {
+    update_bias(Eigen::Vector3d(st_.bias_corr_sum.x(), st_.bias_corr_sum.y(), 1.0), c_.bias_ts_s);
+    st_.bias_n = 0;
+    st_.bias_corr_sum.setZero();
+  }
+}
+
+// acc_e holds the horizontal inclination corrections summed over the last ts seconds.
+void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
+  if (!st_.bias_p_init) {
+    st_.bias_p = Eigen::Matrix3d::Identity() * c_.bias_p0;
+    st_.bias_p_init = true;
+  }
+  const Eigen::Matrix3d r6 = (st_.q_acc * st_.q_gyr).toRotationMatrix();
+  Eigen::Matrix3d r_lp = Eigen::Matrix3d::Identity();
+  Eigen::Vector2d rb_lp = Eigen::Vector2d::Zero();
+  if (p_.motion_bias_est) {
+    // Row-major copy so the 9 channels are the rows of R.
+    double rr[9];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        rr[3 * i + j] = r6(i, j);
+    const auto& rl = st_.motion_r_lp.step(rr, c_.bias_lp, p_.tau_acc_s, ts);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        r_lp(i, j) = rl[3 * i + j];
+    const double rb[2] = {r6.row(0).dot(st_.bias_rad_s), r6.row(1).dot(st_.bias_rad_s)};
+    const auto& bl = st_.motion_bias_lp.step(rb, c_.bias_lp, p_.tau_acc_s, ts);
+    rb_lp = Eigen::Vector2d(bl[0], bl[1]);
+  }
+
+  Eigen::Vector3d e, w;
+  Eigen::Matrix3d cm;
+  const Eigen::Vector3d& b = st_.bias_rad_s;
+  if (st_.rest && p_.rest_bias_est) {
+    e = st_.rest_last_gyr_lp - b;
+    cm = Eigen::Matrix3d::Identity();
+    w.setConstant(c_.bias_rest_w);
+  } else if (p_.motion_bias_est) {
+    e.x() = -acc_e.y() / ts + rb_lp.x() - r_lp.row(0).dot(b);
+    e.y() = acc_e.x() / ts + rb_lp.y() - r_lp.row(1).dot(b);
+    e.z() = -r_lp.row(2).dot(b);
+    cm = r_lp;
+    w = Eigen::Vector3d(c_.bias_motion_w, c_.bias_motion_w, c_.bias_vertical_w);
+  } else {
+    w.setConstant(-1);
+  }
+  // Process noise while the uncertainty is below its initial value.
+  for (int i = 0; i < 3; ++i)
+    if (st_.bias_p(i, i) < c_.bias_p0) st_.bias_p(i, i) += c_.bias_v;
+  if (w.x() < 0) return;
+  const double clip = p_.bias_clip_deg_s * kDeg;
+  e = e.cwiseMax(-clip).cwiseMin(clip);
+  const Eigen::Matrix3d s = cm * st_.bias_p * cm.transpose() + Eigen::Matrix3d(w.asDiagonal());
+  const Eigen::Matrix3d k = st_.bias_p * cm.transpose() * s.inverse();
+  st_.bias_rad_s = (st_.bias_rad_s + k * e).cwiseMax(-clip).cwiseMin(clip);
+  st_.bias_p -= k * cm * st_.bias_p;
+}
+
+void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
+  const double ts = c_.mag_ts_s;
+  const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
+  const Eigen::Vector3d m_e = q6 * mag;
+
+  if (p_.mag_dist_rejection) {
+    const double n = m_e.norm();
+    const double nd[2] = {n, -std::asin(std::clamp(m_e.z() / n, -1.0, 1.0))};
+    const auto& f = st_.mag_norm_dip_lp.step(nd, c_.mag_norm_dip_lp, p_.mag_current_tau_s, ts);
+    st_.mag_norm_dip[0] = f[0];
+    st_.mag_norm_dip[1] = f[1];
+    const double norm = f[0], dip = f[1];
+    const double dip_th = p_.mag_dip_th_deg * kDeg;
+    if (std::abs(norm - st_.mag_ref_norm) < p_.mag_norm_th * st_.mag_ref_norm &&
+        std::abs(dip - st_.mag_ref_dip) < dip_th) {
+      st_.mag_undisturbed_t_s += ts;
+      if (st_.mag_undisturbed_t_s >= p_.mag_min_undisturbed_time_s) {
+        st_.mag_disturbed = false;
+        st_.mag_ref_norm += c_.k_mag_ref * (norm - st_.mag_ref_norm);
+        st_.mag_ref_dip += c_.k_mag_ref * (dip - st_.mag_ref_dip);
+      }
+    } else {
+      st_.mag_undisturbed_t_s = 0;
+      st_.mag_disturbed = true;
+    }
+    // Candidate for a new reference field: self-consistent while rotating.
+    if (std::abs(norm - st_.mag_cand_norm) < p_.mag_norm_th * st_.mag_cand_norm &&
+        std::abs(dip - st_.mag_cand_dip) < dip_th) {
+      // A new field replacing a known one must be seen while rotating (a static local
+      // disturbance stays self-consistent at rest); the very first field needs no rotation.
+      if (st_.mag_ref_norm == 0 || st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kDeg)
+        st_.mag_cand_t_s += ts;
+      st_.mag_cand_norm += c_.k_mag_ref * (norm - st_.mag_cand_norm);
+      st_.mag_cand_dip += c_.k_mag_ref * (dip - st_.mag_cand_dip);
+      if (st_.mag_disturbed &&
+          (st_.mag_cand_t_s >= p_.mag_new_time_s ||
+           (st_.mag_ref_norm == 0 && st_.mag_cand_t_s >= p_.mag_new_first_time_s))) {
+        st_.mag_ref_norm = st_.mag_cand_norm;
+        st_.mag_ref_dip = st_.mag_cand_dip;
+        st_.mag_disturbed = false;
+        st_.mag_undisturbed_t_s = p_.mag_min_undisturbed_time_s;
+      }
+    } else {
+      st_.mag_cand_t_s = 0;
+      st_.mag_cand_norm = norm;
+      st_.mag_cand_dip = dip;
+    }
+  }
+
+  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
+  if (p_.mag_dist_rejection && p_.mag_consistency_th_deg > 0) {
+    // Gyro-consistency: wobble of the measured heading around its short-term mean.
+    if (!st_.mag_err_init) {
+      st_.mag_err_mean_rad = err;
+      st_.mag_err_init = true;
+    }
+    const double dev = wrap_pi(err - st_.mag_err_mean_rad);
+    st_.mag_err_mean_rad = wrap_pi(st_.mag_err_mean_rad + c_.k_mag_consistency * dev);
+    st_.mag_err_var_rad2 += c_.k_mag_consistency * (dev * dev - st_.mag_err_var_rad2);
+    const double th = p_.mag_consistency_th_deg * kDeg;
+    if (st_.mag_err_var_rad2 > th * th) {
+      st_.mag_disturbed = true;
+      st_.mag_undisturbed_t_s = 0;
+    }
+  }
+  double k = c_.k_mag;
+  if (p_.mag_dist_rejection) {
+    if (st_.mag_disturbed) {
+      if (st_.mag_reject_t_s <= p_.mag_max_rejection_time_s) {
+        st_.mag_reject_t_s += ts;
+        k = 0;
+      } else {
+        k /= p_.mag_rejection_factor;
+      }
+    } else {
+      st_.mag_reject_t_s = std::max(st_.mag_reject_t_s - p_.mag_rejection_factor * ts, 0.0);
+    }
+  }
+  if (st_.k_mag_init != 0) {
+    k = std::max(k, st_.k_mag_init);
+    st_.k_mag_init = st_.k_mag_init / (st_.k_mag_init + 1);
+    if (st_.k_mag_init * p_.tau_mag_s < ts) st_.k_mag_init = 0;
+  }
+  (void)dt_s;
+  st_.delta_rad = wrap_pi(st_.delta_rad + k * err);
+  // Variance after a first-order update with gain k and a (2 deg)^2 measurement variance.
+  constexpr double kMeasVar = (2 * kDeg) * (2 * kDeg);
+  st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * kMeasVar;
+  st_.q_delta = heading_quat(st_.delta_rad);
+}
+
+Eigen::Quaterniond AttitudeFilter::q_earth_sensor_6d() const {
+  return st_.q_acc * st_.q_gyr;
+}
+
+Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
+  if (!st_.have_mag) return st_.q_acc * st_.q_gyr;
+  return st_.q_delta * (st_.q_acc * st_.q_gyr);
+}
+
+double AttitudeFilter::heading_sigma_rad() const {
+  if (!st_.have_mag) return kPi;
+  return std::sqrt(std::max(st_.delta_var_rad2, 0.0));
+}
+
+}  // namespace mocap

@@ -1,0 +1,43 @@
+// BROAD error metric (ported from the benchmark's description in the dataset README).
+#include "mocap/filter/broad_metric.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mocap {
+
+void attitude_error_angles(const Eigen::Quaterniond& q_est, const Eigen::Quaterniond& q_ref,
+                           double& total_rad, double& heading_rad, double& inclination_rad) {
+  const Eigen::Quaterniond e = (q_est * q_ref.conjugate()).normalized();
+  const double w = std::abs(e.w());
+  total_rad = 2.0 * std::acos(std::min(w, 1.0));
+  heading_rad = 2.0 * std::atan(std::abs(e.z() / e.w()));
+  inclination_rad = 2.0 * std::acos(std::min(std::sqrt(e.w() * e.w() + e.z() * e.z()), 1.0));
+}
+
+AttitudeErrors score_trial(const BroadTrial& trial, const std::vector<Eigen::Quaterniond>& est) {
+  AttitudeErrors r;
+  if (!trial.has_ref) return r;
+  double st = 0, sh = 0, si = 0;
+  const size_t n = std::min(est.size(), trial.size());
+  for (size_t i = 0; i < n; ++i) {
+    if (trial.has_movement && !trial.movement[i]) continue;
+    const Eigen::Vector4d& rv = trial.ref_wxyz[i];
+    if (!rv.allFinite()) continue;
+    const Eigen::Quaterniond qr(rv[0], rv[1], rv[2], rv[3]);
+    double t, h, inc;
+    attitude_error_angles(est[i], qr, t, h, inc);
+    st += t * t;
+    sh += h * h;
+    si += inc * inc;
+    ++r.n;
+  }
+  if (r.n == 0) return r;
+  constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+  r.total_deg = std::sqrt(st / r.n) * kRadToDeg;
+  r.heading_deg = std::sqrt(sh / r.n) * kRadToDeg;
+  r.inclination_deg = std::sqrt(si / r.n) * kRadToDeg;
+  return r;
+}
+
+}  // namespace mocap

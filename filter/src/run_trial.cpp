@@ -1,0 +1,94 @@
+// Drives the selected algorithm sample by sample over a BROAD-layout trial.
+#include "mocap/filter/run_trial.hpp"
+
+#include <cmath>
+
+#include "mocap/filter/madgwick.hpp"
+#include "mocap/filter/mahony.hpp"
+
+namespace mocap {
+
+std::optional<FilterAlgorithm> parse_filter_algorithm(std::string_view name) {
+  if (name == "default" || name == "ours") return FilterAlgorithm::kDefault;
+  if (name == "madgwick") return FilterAlgorithm::kMadgwick;
+  if (name == "mahony") return FilterAlgorithm::kMahony;
+  return std::nullopt;
+}
+
+std::optional<FilterMode> parse_filter_mode(std::string_view name) {
+  if (name == "9d" || name == "9D") return FilterMode::k9d;
+  if (name == "6d" || name == "6D") return FilterMode::k6d;
+  return std::nullopt;
+}
+
+const char* filter_algorithm_name(FilterAlgorithm a) {
+  switch (a) {
+    case FilterAlgorithm::kDefault:
+      return "default";
+    case FilterAlgorithm::kMadgwick:
+      return "madgwick";
+    case FilterAlgorithm::kMahony:
+      return "mahony";
+  }
+  return "?";
+}
+
+ImuSample trial_sample(const BroadTrial& trial, size_t i, FilterMode mode) {
+  ImuSample s;
+  s.t_host_ns = static_cast<int64_t>(std::llround(trial.t_s[i] * 1e9));
+  s.t_device_ns = s.t_host_ns;
+  s.seq = static_cast<uint32_t>(i);
+  s.valid = kFieldGyr | kFieldAcc;
+  s.gyr_rad_s = trial.gyr_rad_s[i];
+  s.acc_m_s2 = trial.acc_m_s2[i];
+  if (mode == FilterMode::k9d && trial.has_mag) {
+    s.valid |= kFieldMag;
+    s.mag_uT = trial.mag_uT[i];
+  }
+  return s;
+}
+
+namespace {
+
+template <class F>
+void drive(F& f, const BroadTrial& trial, FilterMode mode, std::vector<Eigen::Quaterniond>& out) {
+  out.resize(trial.size());
+  for (size_t i = 0; i < trial.size(); ++i) {
+    f.update(trial_sample(trial, i, mode));
+    out[i] = f.q_earth_sensor();
+  }
+}
+
+}  // namespace
+
+void run_trial(const BroadTrial& trial, FilterAlgorithm alg, FilterMode mode,
+               const FilterParams& params, std::vector<Eigen::Quaterniond>& out) {
+  const bool mag = mode == FilterMode::k9d;
+  switch (alg) {
+    case FilterAlgorithm::kDefault: {
+      AttitudeFilter f(params);
+      out.resize(trial.size());
+      for (size_t i = 0; i < trial.size(); ++i) {
+        f.update(trial_sample(trial, i, mode));
+        out[i] = mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();
+      }
+      return;
+    }
+    case FilterAlgorithm::kMadgwick: {
+      MadgwickParams p;
+      p.use_mag = mag;
+      MadgwickFilter f(p);
+      drive(f, trial, mode, out);
+      return;
+    }
+    case FilterAlgorithm::kMahony: {
+      MahonyParams p;
+      p.use_mag = mag;
+      MahonyFilter f(p);
+      drive(f, trial, mode, out);
+      return;
+    }
+  }
+}
+
+}  // namespace mocap

@@ -1,0 +1,69 @@
+// Motions with known ground truth for the virtual performer: built-in procedural clips (N-pose
+// calibration stand, walk cycle, turn in place, squat, arm raises through 90 degrees of shoulder
+// elevation, reaching) and sequences of them. A Motion gives the pelvis orientation and every
+// joint rotation as a smooth (C2) function of time; MotionTrack adds the pelvis translation from
+// foot contact (the lower ankle stays planted) and optional looping.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "mocap/sim/body_pose.hpp"
+
+namespace mocap::sim {
+
+class Motion {
+ public:
+  virtual ~Motion() = default;
+  /// Length of the motion, seconds.
+  virtual double duration_s() const = 0;
+  /// Pelvis orientation and joint rotations at t_s in [0, duration_s()]. If
+  /// has_root_translation() is false the pelvis position is left for MotionTrack to fill.
+  virtual void pose(double t_s, BodyPose& out) const = 0;
+  /// True when the motion carries its own pelvis trajectory (e.g. motion capture data).
+  virtual bool has_root_translation() const { return false; }
+  /// Interval [start, end] in seconds during which the performer stands still in the N-pose
+  /// (the calibration pose). Every built-in motion starts with one.
+  virtual std::pair<double, double> calibration_window_s() const { return {0.0, 0.0}; }
+};
+
+/// Names accepted by make_motion: "npose", "walk", "turn", "squat", "arm_raise", "reach" (each
+/// preceded by a 3 s N-pose stand and followed by a 1 s stand) and "sequence" (all of them
+/// strung together: stand, walk, turn, walk back, turn, squat, arm raises, reach).
+std::span<const std::string_view> motion_names();
+
+/// The built-in motion of that name; throws std::invalid_argument naming the valid names.
+std::unique_ptr<Motion> make_motion(std::string_view name);
+
+/// A motion placed in the world: adds the pelvis translation (feet planted: the weight-bearing
+/// ankle stays fixed on the floor, blended smoothly between feet) and optionally loops forever
+/// (each loop continues from where the previous one ended). Precomputes the root trajectory at
+/// construction; pose() does not allocate.
+class MotionTrack {
+ public:
+  MotionTrack(std::shared_ptr<const Motion> motion, const BodyDimensions& dims, bool loop);
+  /// Full body pose at performer time t_s >= 0 (clamped to the end when not looping).
+  void pose(double t_s, BodyPose& out) const;
+  const Motion& motion() const { return *motion_; }
+  double period_s() const { return motion_->duration_s(); }
+
+ private:
+  void local_pose(double t_s, BodyPose& out) const;  // within one period, root from the table
+  Eigen::Vector3d root_velocity(double t_s) const;   // horizontal, from the planted feet
+  void planted_root(const BodyPose& orientations, double& z_m, Eigen::Vector3d& rel_l,
+                    Eigen::Vector3d& rel_r, double& w_r) const;
+
+  std::shared_ptr<const Motion> motion_;
+  BodyDimensions dims_;
+  bool loop_;
+  double ankle_height_m_ = 0;
+  double grid_s_ = 0.005;
+  std::vector<Eigen::Vector3d> root_xy_;  // integrated horizontal pelvis position on the grid
+  double loop_yaw_rad_ = 0;               // heading change over one period
+  Eigen::Vector3d loop_shift_m_ = Eigen::Vector3d::Zero();  // root displacement over one period
+};
+
+}  // namespace mocap::sim

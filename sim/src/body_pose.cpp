@@ -1,0 +1,20 @@
+// Ground-truth forward kinematics (independent of the skeleton solver under test).
+#include "mocap/sim/body_pose.hpp"
+
+namespace mocap::sim {
+
+void truth_forward_kinematics(const BodyDimensions& dims, const BodyPose& pose, TruthFrame& out) {
+  out.q_earth_segment[0] = pose.q_earth_pelvis.normalized();
+  out.p_earth_segment_m[0] = pose.p_earth_pelvis_m;
+  out.q_parent_segment[0] = out.q_earth_segment[0];
+  for (int i = 1; i < kSegmentCount; ++i) {
+    const int parent = kSegmentParent[i];
+    const Eigen::Quaterniond q_joint = pose.q_parent_segment[i].normalized();
+    out.q_parent_segment[i] = q_joint;
+    out.q_earth_segment[i] = out.q_earth_segment[parent] * q_joint;
+    out.p_earth_segment_m[i] =
+        out.p_earth_segment_m[parent] + out.q_earth_segment[parent] * dims.joint_offset_m[i];
+  }
+}
+
+}  // namespace mocap::sim

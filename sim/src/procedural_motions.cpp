@@ -1,0 +1,259 @@
+// Built-in procedural motions: each clip is a C2-smooth function of time giving joint angles that
+// start and end in the N-pose, so clips string together into sequences without jumps.
+// Angle conventions (segment frames x forward, y left, z up): flexion of hip and shoulder lifts the
+// limb forward = rotation about y by -angle; knee flexion = +angle about y; elbow flexion = -angle
+// about y; left-arm abduction = +angle about x, right-arm abduction = -angle about x.
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "mocap/sim/motion.hpp"
+
+namespace mocap::sim {
+namespace {
+
+using Eigen::Quaterniond;
+using Eigen::Vector3d;
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Quaterniond rx(double deg) {
+  return Quaterniond(Eigen::AngleAxisd(deg * kDeg, Vector3d::UnitX()));
+}
+Quaterniond ry(double deg) {
+  return Quaterniond(Eigen::AngleAxisd(deg * kDeg, Vector3d::UnitY()));
+}
+Quaterniond rz(double deg) {
+  return Quaterniond(Eigen::AngleAxisd(deg * kDeg, Vector3d::UnitZ()));
+}
+
+/// Quintic smoothstep: 0 below 0, 1 above 1, C2 in between.
+double smooth(double u) {
+  if (u <= 0) return 0;
+  if (u >= 1) return 1;
+  return u * u * u * (10 - 15 * u + 6 * u * u);
+}
+/// C2 bump on [0,1]: 0 at the ends (with zero first and second derivative... first only is
+/// guaranteed zero for 64u^3(1-u)^3, second is zero too), 1 at u = 0.5.
+double bump(double u) {
+  if (u <= 0 || u >= 1) return 0;
+  const double v = u * (1 - u);
+  return 64 * v * v * v;
+}
+/// Amplitude envelope: ramps 0 -> 1 over `ramp` seconds at the start and back to 0 at the end.
+double envelope(double t, double d, double ramp) {
+  return smooth(t / ramp) * smooth((d - t) / ramp);
+}
+double frac(double x) {
+  return x - std::floor(x);
+}
+
+void set(BodyPose& p, Segment s, const Quaterniond& q) {
+  p.q_parent_segment[index(s)] = q;
+}
+
+/// One leg of a walk/step: hip flexion, knee flexion; the ankle keeps the foot level.
+void leg(BodyPose& p, bool left, double hip_deg, double knee_deg, double pelvis_pitch_deg) {
+  const Segment thigh = left ? Segment::thigh_l : Segment::thigh_r;
+  const Segment shank = left ? Segment::shank_l : Segment::shank_r;
+  const Segment foot = left ? Segment::foot_l : Segment::foot_r;
+  set(p, thigh, ry(-hip_deg));
+  set(p, shank, ry(knee_deg));
+  set(p, foot, ry(hip_deg - knee_deg - pelvis_pitch_deg));
+}
+
+struct Clip {
+  enum Kind { kStand, kWalk, kTurn, kSquat, kArmRaise, kReach } kind;
+  double duration_s;
+  double yaw_change_deg = 0;  // heading change over the clip (turn)
+};
+
+void stand(double, double, BodyPose&) {}
+
+void walk(double t, double d, BodyPose& p) {
+  const double cycle_s = 1.1;
+  const double a = envelope(t, d, 1.0);
+  const double phase_l = t / cycle_s, phase_r = phase_l + 0.5;
+  const double c_l = std::cos(2 * std::numbers::pi * phase_l);
+  auto knee = [&](double phase) {
+    const double u = frac(phase);
+    return a * (60 * bump((u - 0.5) / 0.5) + 10 * bump((u - 0.05) / 0.3));
+  };
+  // Left stance while the left hip extends (phase 0..0.5), right stance for 0.5..1, with 10%
+  // double support around each heel strike.
+  auto rise = [](double x) { return smooth((x - 0.45) / 0.1) - smooth((x - 0.95) / 0.1); };
+  p.weight_right = rise(frac(phase_l)) + rise(frac(phase_l) + 1);
+  leg(p, true, a * 20 * c_l, knee(phase_l), 0);
+  leg(p, false, a * 20 * std::cos(2 * std::numbers::pi * phase_r), knee(phase_r), 0);
+  p.q_earth_pelvis = rz(-4 * a * c_l);
+  set(p, Segment::torso, rz(4 * a * c_l) * ry(3 * a));
+  set(p, Segment::neck, ry(-3 * a));
+  const double s_l = std::sin(2 * std::numbers::pi * phase_l);
+  set(p, Segment::upper_arm_l, ry(18 * a * c_l) * rx(5 * a));
+  set(p, Segment::upper_arm_r, ry(-18 * a * c_l) * rx(-5 * a));
+  set(p, Segment::forearm_l, ry(-a * (20 + 8 * s_l)));
+  set(p, Segment::forearm_r, ry(-a * (20 - 8 * s_l)));
+}
+
+void turn(double t, double d, double yaw_deg, BodyPose& p) {
+  const double step_cycle_s = 0.9;  // left step then right step
+  const double a = envelope(t, d, 0.4);
+  const double u = frac(t / step_cycle_s);
+  const double lift_l = a * bump(u / 0.5), lift_r = a * bump((u - 0.5) / 0.5);
+  leg(p, true, 25 * lift_l, 45 * lift_l, 0);
+  leg(p, false, 25 * lift_r, 45 * lift_r, 0);
+  p.q_earth_pelvis = rz(yaw_deg * smooth((t - 0.3) / (d - 0.6)));
+  set(p, Segment::forearm_l, ry(-15 * a));
+  set(p, Segment::forearm_r, ry(-15 * a));
+}
+
+void squat(double t, double d, BodyPose& p) {
+  const double half = d / 2;
+  const double u = bump(std::fmod(t, half) / half);
+  p.q_earth_pelvis = ry(20 * u);
+  leg(p, true, 100 * u, 105 * u, 20 * u);
+  leg(p, false, 100 * u, 105 * u, 20 * u);
+  set(p, Segment::torso, ry(15 * u));
+  set(p, Segment::neck, ry(-20 * u));
+  set(p, Segment::head, ry(-15 * u));
+  set(p, Segment::upper_arm_l, ry(-80 * u));
+  set(p, Segment::upper_arm_r, ry(-80 * u));
+  set(p, Segment::forearm_l, ry(-10 * u));
+  set(p, Segment::forearm_r, ry(-10 * u));
+}
+
+void arm_raise(double t, double d, BodyPose& p) {
+  const double part = d / 4;
+  const int k = std::min(3, static_cast<int>(t / part));
+  const double u = bump((t - k * part) / part);
+  switch (k) {
+    case 0:  // both arms forward to 120 degrees of flexion (through 90: no singularity)
+      set(p, Segment::upper_arm_l, ry(-120 * u));
+      set(p, Segment::upper_arm_r, ry(-120 * u));
+      break;
+    case 1:  // both arms sideways to 110 degrees of abduction
+      set(p, Segment::upper_arm_l, rx(110 * u));
+      set(p, Segment::upper_arm_r, rx(-110 * u));
+      break;
+    case 2:  // left arm overhead (160 flexion), right arm abducted 95 with elbow bent
+      set(p, Segment::upper_arm_l, ry(-160 * u));
+      set(p, Segment::upper_arm_r, rx(-95 * u));
+      set(p, Segment::forearm_r, ry(-60 * u));
+      break;
+    default:  // elbow curls, arms hanging, wrists flexing
+      set(p, Segment::forearm_l, ry(-130 * u));
+      set(p, Segment::forearm_r, ry(-130 * u));
+      set(p, Segment::hand_l, ry(-40 * u) * rx(15 * u));
+      set(p, Segment::hand_r, ry(40 * u) * rx(-15 * u));
+      break;
+  }
+}
+
+void reach(double t, double d, BodyPose& p) {
+  const double half = d / 2;
+  const bool right = t < half;
+  const double tau = (right ? t : t - half) / half;
+  const double u = bump(tau);
+  const double side = right ? 1 : -1;  // reach across the body toward the other side
+  set(p, Segment::torso, rz(20 * side * u) * ry(10 * u));
+  set(p, right ? Segment::upper_arm_r : Segment::upper_arm_l, rz(25 * side * u) * ry(-75 * u));
+  const double elbow = 25 * u + 60 * bump(2 * tau) + 60 * bump(2 * tau - 1);
+  set(p, right ? Segment::forearm_r : Segment::forearm_l, ry(-elbow));
+  set(p, right ? Segment::hand_r : Segment::hand_l, ry(-20 * u) * rz(10 * side * u));
+  set(p, Segment::neck, rz(-10 * side * u) * ry(10 * u));
+}
+
+void clip_pose(const Clip& c, double t, BodyPose& p) {
+  switch (c.kind) {
+    case Clip::kStand:
+      return stand(t, c.duration_s, p);
+    case Clip::kWalk:
+      return walk(t, c.duration_s, p);
+    case Clip::kTurn:
+      return turn(t, c.duration_s, c.yaw_change_deg, p);
+    case Clip::kSquat:
+      return squat(t, c.duration_s, p);
+    case Clip::kArmRaise:
+      return arm_raise(t, c.duration_s, p);
+    case Clip::kReach:
+      return reach(t, c.duration_s, p);
+  }
+}
+
+/// Clips played one after another; the heading accumulates over turns.
+class ClipSequence final : public Motion {
+ public:
+  explicit ClipSequence(std::vector<Clip> clips) : clips_(std::move(clips)) {
+    double t = 0, yaw = 0;
+    for (const Clip& c : clips_) {
+      start_s_.push_back(t);
+      yaw_before_deg_.push_back(yaw);
+      t += c.duration_s;
+      yaw += c.yaw_change_deg;
+    }
+    duration_s_ = t;
+  }
+  double duration_s() const override { return duration_s_; }
+  std::pair<double, double> calibration_window_s() const override {
+    return {0.0, clips_.front().kind == Clip::kStand ? clips_.front().duration_s : 0.0};
+  }
+  void pose(double t_s, BodyPose& out) const override {
+    t_s = std::clamp(t_s, 0.0, duration_s_);
+    size_t i = 0;
+    while (i + 1 < clips_.size() && t_s >= start_s_[i + 1])
+      ++i;
+    out = BodyPose{};
+    clip_pose(clips_[i], t_s - start_s_[i], out);
+    out.q_earth_pelvis = rz(yaw_before_deg_[i]) * out.q_earth_pelvis;
+  }
+
+ private:
+  std::vector<Clip> clips_;
+  std::vector<double> start_s_, yaw_before_deg_;
+  double duration_s_ = 0;
+};
+
+constexpr std::string_view kNames[] = {"npose",     "walk",  "turn",    "squat",
+                                       "arm_raise", "reach", "sequence"};
+
+}  // namespace
+
+std::span<const std::string_view> motion_names() {
+  return kNames;
+}
+
+std::unique_ptr<Motion> make_motion(std::string_view name) {
+  const Clip calib{Clip::kStand, 3.0}, rest{Clip::kStand, 1.0};
+  std::vector<Clip> clips;
+  if (name == "npose") {
+    clips = {{Clip::kStand, 5.0}};
+  } else if (name == "walk") {
+    clips = {calib, {Clip::kWalk, 8.8}, rest};
+  } else if (name == "turn") {
+    clips = {calib, {Clip::kTurn, 4.5, 180}, rest};
+  } else if (name == "squat") {
+    clips = {calib, {Clip::kSquat, 6.0}, rest};
+  } else if (name == "arm_raise") {
+    clips = {calib, {Clip::kArmRaise, 12.0}, rest};
+  } else if (name == "reach") {
+    clips = {calib, {Clip::kReach, 6.0}, rest};
+  } else if (name == "sequence") {
+    clips = {calib,
+             {Clip::kWalk, 6.6},
+             {Clip::kTurn, 3.6, 180},
+             {Clip::kWalk, 6.6},
+             {Clip::kTurn, 3.6, 180},
+             {Clip::kSquat, 6.0},
+             {Clip::kArmRaise, 12.0},
+             {Clip::kReach, 6.0},
+             rest};
+  } else {
+    std::string valid;
+    for (auto n : kNames)
+      valid += (valid.empty() ? "" : ", ") + std::string(n);
+    throw std::invalid_argument("unknown motion '" + std::string(name) + "' (valid: " + valid +
+                                ")");
+  }
+  return std::make_unique<ClipSequence>(std::move(clips));
+}
+
+}  // namespace mocap::sim

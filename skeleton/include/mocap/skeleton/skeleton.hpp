@@ -1,0 +1,119 @@
+// The skeleton solver: per-segment earth-frame sensor orientations in, a whole-body posture
+// (PoseFrame) out. Forward kinematics as in the thesis's Figure 29: each segment's orientation
+// comes from its own sensor (through the calibration), positions follow the parent chain by the
+// joint offsets; segments without a sensor are interpolated between tracked neighbours along
+// their chain (e.g. torso between pelvis and neck) or follow their parent. Joint rotations are
+// checked against swing-twist/hinge limits (reported, optionally clamped); the root moves with
+// the stance foot or is pinned.
+//
+// Per-frame work (set_sensor_orientation, solve) never allocates, and is deterministic: identical
+// inputs give bit-identical frames.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+
+#include "mocap/skeleton/body_model.hpp"
+#include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/joint_limits.hpp"
+#include "mocap/skeleton/pose_frame.hpp"
+#include "mocap/skeleton/rig.hpp"
+#include "mocap/skeleton/root_motion.hpp"
+
+namespace mocap {
+
+enum class LimitPolicy : uint8_t {
+  report,  ///< report violations only, the pose follows the sensors
+  clamp,   ///< replace each violating joint rotation by the nearest allowed one
+};
+
+struct SkeletonOptions {
+  LimitPolicy limit_policy = LimitPolicy::report;
+  RootMotionOptions root{};
+  /// A segment whose newest sample is older than this (relative to the newest of all) is stale:
+  /// its last orientation is held and kSegStale set.
+  int64_t stale_after_ns = 200'000'000;
+  /// Time constant of the per-joint violation average (the drift signal), seconds.
+  double violation_tau_s = 2.0;
+};
+
+class Skeleton {
+ public:
+  Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping rig,
+           SkeletonOptions options = {});
+
+  /// Applies a calibration (copies it). Without one, sensors are taken as aligned with their
+  /// segments (q_sensor_segment = identity).
+  void set_calibration(const Calibration& c) { calib_ = c; }
+  const Calibration& calibration() const { return calib_; }
+  void clear_calibration() { calib_ = Calibration{}; }
+  /// Heading-only reset from the latest sensor orientations (the person stands facing forward).
+  void reset_heading();
+
+  /// Newest orientation of the sensor on `segment` (earth frame). Non-finite or zero quaternions
+  /// are rejected (counted in rejected_samples()). sensor_flags: SegmentFlag bits reported by
+  /// the sensor's filter (kSegAtRest, kSegMagDisturbed), passed through to the frame.
+  void set_sensor_orientation(int segment, const Eigen::Quaterniond& q_earth_sensor, int64_t t_ns,
+                              uint32_t sensor_flags = 0);
+
+  /// Solves the posture at the newest sample time. Fills every skeleton field of `out`
+  /// (frame, t_ns, calibrated flag, orientations, positions, joint rotations, violations,
+  /// segment flags); leaves out.sensors / sensor_count and the other frame flags to the caller.
+  void solve(PoseFrame& out);
+
+  /// Results of the last solve in double precision.
+  const std::array<Eigen::Quaterniond, kSegmentCount>& q_earth_segment() const { return q_earth_; }
+  const std::array<Eigen::Quaterniond, kSegmentCount>& q_parent_segment() const { return q_joint_; }
+  const std::array<Eigen::Vector3d, kSegmentCount>& p_earth_segment_m() const { return p_earth_; }
+  const std::array<JointCheck, kSegmentCount>& joint_checks() const { return checks_; }
+  /// Exponential average of each joint's violation (degrees): a drift signal for the pipeline.
+  const std::array<double, kSegmentCount>& violation_average_deg() const { return viol_avg_; }
+  /// Largest violation_average_deg().
+  double drift_signal_deg() const;
+  uint64_t rejected_samples() const { return rejected_; }
+
+  RootMotion& root_motion() { return root_; }
+  const BodyModel& model() const { return model_; }
+  const JointLimits& limits() const { return limits_; }
+  const RigMapping& rig() const { return rig_; }
+  const SkeletonOptions& options() const { return opt_; }
+
+ private:
+  BodyModel model_;
+  JointLimits limits_;
+  RigMapping rig_;
+  SkeletonOptions opt_;
+  Calibration calib_;
+  RootMotion root_;
+
+  // Inputs.
+  std::array<Eigen::Quaterniond, kSegmentCount> q_es_;
+  std::array<int64_t, kSegmentCount> t_in_ns_{};
+  std::array<bool, kSegmentCount> have_{};
+  std::array<uint32_t, kSegmentCount> in_flags_{};
+  int64_t t_newest_ns_ = 0;
+  int64_t t_prev_solve_ns_ = 0;
+  uint64_t frame_ = 0;
+  uint64_t rejected_ = 0;
+
+  // Inference plan: for an untracked segment, the tracked segment down its chain and the
+  // number of steps to it (0 = none).
+  std::array<int8_t, kSegmentCount> chain_target_{};
+  std::array<int8_t, kSegmentCount> chain_steps_{};
+
+  // Outputs.
+  std::array<Eigen::Quaterniond, kSegmentCount> q_earth_;
+  std::array<Eigen::Quaterniond, kSegmentCount> q_joint_;
+  std::array<Eigen::Vector3d, kSegmentCount> p_earth_;
+  std::array<Eigen::Vector3d, kSegmentCount> p_rel_;
+  std::array<JointCheck, kSegmentCount> checks_{};
+  std::array<double, kSegmentCount> viol_avg_{};
+};
+
+/// The continuation of each segment's chain used to interpolate untracked segments:
+/// torso->neck->head, upper arm->forearm->hand, thigh->shank->foot; -1 at chain ends.
+inline constexpr std::array<int8_t, kSegmentCount> kChainChild = {1, 2,  3,  -1, 5,  6,  -1, 8,
+                                                                  9, -1, 11, 12, -1, 14, 15, -1};
+
+}  // namespace mocap

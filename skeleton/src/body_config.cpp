@@ -1,0 +1,98 @@
+// Body model config: TOML parsing of the editable form and the build of the runtime form.
+#include <toml++/toml.h>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "mocap/skeleton/body_model.hpp"
+
+namespace mocap {
+
+namespace {
+
+[[noreturn]] void fail(std::string_view source, const toml::source_region& r,
+                       const std::string& what) {
+  std::ostringstream os;
+  os << source << ":" << r.begin.line << ":" << r.begin.column << ": " << what;
+  throw std::runtime_error(os.str());
+}
+
+Eigen::Vector3d read_vec3(std::string_view source, const toml::node& n, std::string_view key,
+                          double limit_m) {
+  const toml::array* a = n.as_array();
+  if (!a || a->size() != 3)
+    fail(source, n.source(), std::string(key) + " must be an array of 3 numbers");
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) {
+    const toml::node& e = *a->get(static_cast<size_t>(i));
+    std::optional<double> d = e.value<double>();
+    if (!d || !e.is_number()) fail(source, e.source(), std::string(key) + " must hold numbers");
+    if (!std::isfinite(*d) || std::abs(*d) > limit_m)
+      fail(source, e.source(), std::string(key) + " value out of range (|v| <= 2 m)");
+    v[i] = *d;
+  }
+  return v;
+}
+
+}  // namespace
+
+BodyModelConfig parse_body_config(std::string_view text, std::string_view source) {
+  toml::table tbl;
+  try {
+    tbl = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    fail(source, e.source(), std::string(e.description()));
+  }
+  BodyModelConfig cfg;
+  for (auto&& [k, v] : tbl) {
+    if (k == "height_m") {
+      std::optional<double> h = v.value<double>();
+      if (!h || !v.is_number()) fail(source, v.source(), "height_m must be a number");
+      if (!std::isfinite(*h) || *h < 0.5 || *h > 2.6)
+        fail(source, v.source(), "height_m out of range (0.5 .. 2.6 m)");
+      cfg.height_m = *h;
+    } else if (k == "segment") {
+      const toml::table* segs = v.as_table();
+      if (!segs) fail(source, v.source(), "[segment] must be a table of segment tables");
+      for (auto&& [sk, sv] : *segs) {
+        const auto seg = segment_from_name(sk.str());
+        if (!seg) fail(source, sk.source(), "unknown segment '" + std::string(sk.str()) + "'");
+        const toml::table* st = sv.as_table();
+        if (!st) fail(source, sv.source(), "segment." + std::string(sk.str()) + " must be a table");
+        for (auto&& [fk, fv] : *st) {
+          if (fk == "joint_offset_m")
+            cfg.joint_offset_m[index(*seg)] = read_vec3(source, fv, fk.str(), 2.0);
+          else if (fk == "end_offset_m")
+            cfg.end_offset_m[index(*seg)] = read_vec3(source, fv, fk.str(), 2.0);
+          else
+            fail(source, fk.source(),
+                 "unknown key '" + std::string(fk.str()) + "' in segment." + std::string(sk.str()));
+        }
+      }
+    } else {
+      fail(source, k.source(), "unknown key '" + std::string(k.str()) + "'");
+    }
+  }
+  return cfg;
+}
+
+BodyModelConfig load_body_config(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open body config");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_body_config(ss.str(), path);
+}
+
+BodyModel::BodyModel(const BodyModelConfig& cfg)
+    : dims_(body_dimensions_from_height(cfg.height_m)) {
+  for (int i = 0; i < kSegmentCount; ++i) {
+    if (cfg.joint_offset_m[i]) dims_.joint_offset_m[i] = *cfg.joint_offset_m[i];
+    if (cfg.end_offset_m[i]) dims_.end_offset_m[i] = *cfg.end_offset_m[i];
+  }
+}
+
+BodyModel::BodyModel(const BodyDimensions& dims) : dims_(dims) {}
+
+}  // namespace mocap

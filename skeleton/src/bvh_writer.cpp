@@ -1,0 +1,130 @@
+// BVH writer: our skeleton as standard bones, streaming frames, frame count patched on close.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "mocap/skeleton/bvh.hpp"
+#include "mocap/skeleton/quat_math.hpp"
+
+namespace mocap {
+
+namespace {
+constexpr int kFramesFieldWidth = 12;
+// Segments whose bone ends in an End Site.
+bool is_leaf(int s) {
+  for (int c = s + 1; c < kSegmentCount; ++c)
+    if (kSegmentParent[c] == s) return false;
+  return true;
+}
+}  // namespace
+
+Eigen::Quaterniond q_bvh_body() {
+  Eigen::Matrix3d c;
+  c << 0, 1, 0, 0, 0, 1, 1, 0, 0;
+  return Eigen::Quaterniond(c);
+}
+
+Eigen::Vector3d zxy_degrees_from_rotation(const Eigen::Quaterniond& q) {
+  const Eigen::Matrix3d r = q.normalized().toRotationMatrix();
+  const double sx = std::clamp(r(2, 1), -1.0, 1.0);
+  const double x = std::asin(sx);
+  double z, y;
+  if (std::abs(sx) < 1.0 - 1e-12) {
+    y = std::atan2(-r(2, 0), r(2, 2));
+    z = std::atan2(-r(0, 1), r(1, 1));
+  } else {  // gimbal lock: put everything in z
+    y = 0;
+    z = std::atan2(r(1, 0), r(0, 0));
+  }
+  return Eigen::Vector3d(z, x, y) * kRadToDeg;
+}
+
+Eigen::Quaterniond rotation_from_zxy_degrees(double z_deg, double x_deg, double y_deg) {
+  return axis_rotation(2, z_deg * kDegToRad) * axis_rotation(0, x_deg * kDegToRad) *
+         axis_rotation(1, y_deg * kDegToRad);
+}
+
+std::string bvh_hierarchy(const BodyModel& model, double upm) {
+  const Eigen::Quaterniond c = q_bvh_body();
+  std::ostringstream os;
+  char buf[128];
+  auto vec = [&](const Eigen::Vector3d& v_m) {
+    const Eigen::Vector3d b = c * v_m * upm;
+    std::snprintf(buf, sizeof buf, "%.6f %.6f %.6f", b.x(), b.y(), b.z());
+    return std::string(buf);
+  };
+  // Recursive emission over our fixed tree.
+  auto emit = [&](auto&& self, int s, int depth) -> void {
+    const std::string ind(static_cast<size_t>(depth) * 2, ' ');
+    if (s == 0) {
+      os << "ROOT " << kBvhBoneNames[s] << "\n{\n";
+      os << "  OFFSET 0.000000 0.000000 0.000000\n";
+      os << "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n";
+    } else {
+      os << ind << "JOINT " << kBvhBoneNames[s] << "\n" << ind << "{\n";
+      os << ind << "  OFFSET " << vec(model.joint_offset_m(s)) << "\n";
+      os << ind << "  CHANNELS 3 Zrotation Xrotation Yrotation\n";
+    }
+    for (int ch = s + 1; ch < kSegmentCount; ++ch)
+      if (kSegmentParent[ch] == s) self(self, ch, depth + 1);
+    if (is_leaf(s)) {
+      os << ind << "  End Site\n" << ind << "  {\n";
+      os << ind << "    OFFSET " << vec(model.end_offset_m(s)) << "\n" << ind << "  }\n";
+    }
+    os << ind << "}\n";
+  };
+  os << "HIERARCHY\n";
+  emit(emit, 0, 0);
+  return os.str();
+}
+
+BvhWriter::BvhWriter(const std::string& path, const BodyModel& model, BvhWriterOptions options)
+    : opt_(options), path_(path) {
+  if (!(opt_.frame_time_s > 0) || !(opt_.units_per_m > 0))
+    throw std::invalid_argument("BvhWriter: frame time and units must be positive");
+  f_ = std::fopen(path.c_str(), "wb");
+  if (!f_) throw std::runtime_error(path + ": cannot open for writing");
+  const std::string h = bvh_hierarchy(model, opt_.units_per_m);
+  std::fputs(h.c_str(), f_);
+  std::fputs("MOTION\nFrames: ", f_);
+  frames_pos_ = std::ftell(f_);
+  std::fprintf(f_, "%-*d\nFrame Time: %.9f\n", kFramesFieldWidth, 0, opt_.frame_time_s);
+  if (std::ferror(f_)) throw std::runtime_error(path + ": write failed");
+}
+
+BvhWriter::~BvhWriter() {
+  try {
+    close();
+  } catch (...) {
+  }
+}
+
+void BvhWriter::write_frame(const PoseFrame& fr) {
+  if (!f_) throw std::runtime_error(path_ + ": BVH writer is closed");
+  const Eigen::Quaterniond c = q_bvh_body();
+  const Eigen::Quaterniond ci = c.conjugate();
+  const auto& p = fr.p_earth_segment_m[0];
+  const Eigen::Vector3d root = c * Eigen::Vector3d(p[0], p[1], p[2]) * opt_.units_per_m;
+  std::fprintf(f_, "%.5f %.5f %.5f", root.x(), root.y(), root.z());
+  for (int s = 0; s < kSegmentCount; ++s) {
+    const Eigen::Quaterniond q = from_wxyz(s == 0 ? fr.q_earth_segment[0] : fr.q_parent_segment[s]);
+    const Eigen::Vector3d e = zxy_degrees_from_rotation(c * q.normalized() * ci);
+    std::fprintf(f_, " %.6f %.6f %.6f", e[0], e[1], e[2]);
+  }
+  std::fputc('\n', f_);
+  if (std::ferror(f_)) throw std::runtime_error(path_ + ": write failed");
+  ++frames_;
+}
+
+void BvhWriter::close() {
+  if (!f_) return;
+  std::FILE* f = f_;
+  f_ = nullptr;
+  bool ok = std::fseek(f, frames_pos_, SEEK_SET) == 0;
+  ok = ok && std::fprintf(f, "%-*d", kFramesFieldWidth, frames_) > 0;
+  ok = (std::fclose(f) == 0) && ok;
+  if (!ok) throw std::runtime_error(path_ + ": failed to finish BVH file");
+}
+
+}  // namespace mocap

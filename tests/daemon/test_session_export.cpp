@@ -1,0 +1,102 @@
+// Tests of `mocap export`: the real command run on real session files (CSV values, a torn tail,
+// a file of an unknown version, usage errors).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "session_test_util.hpp"
+
+using namespace mocap;
+using namespace mocap::test;
+using mocap::daemon::SessionWriter;
+
+namespace {
+
+const std::string kMocap = std::string(MOCAP_BINARY_DIR) + "/bin/mocap";
+
+int run(const std::string& args, const std::string& err_file) {
+  const int status = std::system((kMocap + " export " + args + " 2> " + err_file).c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+void record(const std::string& path, int frames) {
+  std::string err;
+  auto w = SessionWriter::create(path, make_header(), {}, &err);
+  ASSERT_TRUE(w) << err;
+  for (int i = 0; i < frames; ++i) {
+    ASSERT_TRUE(w->append_sample(make_sample(static_cast<uint32_t>(i))));
+    ASSERT_TRUE(w->append_pose(make_pose(static_cast<uint64_t>(i))));
+  }
+  ASSERT_TRUE(w->close());
+}
+
+}  // namespace
+
+TEST(SessionExport, CsvHasOneRowPerSegmentPerFrameWithTheRecordedValues) {
+  TempDir dir;
+  const std::string ses = dir.file("s.mocap"), csv = dir.file("s.csv"), err = dir.file("err");
+  record(ses, 5);
+  ASSERT_EQ(run(ses + " --csv " + csv, err), 0) << read_text(err);
+  std::istringstream in(read_text(csv));
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line, "t,segment,w,x,y,z,px,py,pz");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    const int frame = rows / kSegmentCount, s = rows % kSegmentCount;
+    const PoseFrame f = make_pose(static_cast<uint64_t>(frame));
+    std::istringstream ls(line);
+    std::string cell;
+    std::vector<std::string> cells;
+    while (std::getline(ls, cell, ','))
+      cells.push_back(cell);
+    ASSERT_EQ(cells.size(), 9u) << line;
+    EXPECT_NEAR(std::stod(cells[0]), (f.t_ns - make_header().t_start_host_ns) * 1e-9, 1e-6);
+    EXPECT_EQ(cells[1], std::string(kSegmentNames[s]));
+    for (int k = 0; k < 4; ++k)
+      EXPECT_NEAR(std::stod(cells[2 + k]), f.q_earth_segment[s][k], 1e-6);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(std::stod(cells[6 + k]), f.p_earth_segment_m[s][k], 1e-5);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 5 * kSegmentCount);
+}
+
+TEST(SessionExport, TornTailIsReportedAndTheRestExported) {
+  TempDir dir;
+  const std::string ses = dir.file("t.mocap"), csv = dir.file("t.csv"), err = dir.file("err");
+  record(ses, 4);
+  std::filesystem::resize_file(ses, std::filesystem::file_size(ses) - 10);  // cut the last pose
+  ASSERT_EQ(run(ses + " --csv " + csv, err), 0) << read_text(err);
+  EXPECT_NE(read_text(err).find("ignored"), std::string::npos) << read_text(err);
+  const std::string text = read_text(csv);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1 + 3 * kSegmentCount);
+}
+
+TEST(SessionExport, BadInputsGiveClearErrors) {
+  TempDir dir;
+  const std::string ses = dir.file("v.mocap"), err = dir.file("err");
+  record(ses, 1);
+  {
+    std::fstream f(ses, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(8);
+    const char v9[4] = {9, 0, 0, 0};
+    f.write(v9, 4);
+  }
+  EXPECT_EQ(run(ses + " --csv " + dir.file("o.csv"), err), 1);
+  EXPECT_NE(read_text(err).find("version 9 is not supported"), std::string::npos) << read_text(err);
+  EXPECT_EQ(run(dir.file("missing.mocap") + " --csv " + dir.file("o.csv"), err), 1);
+  EXPECT_NE(read_text(err).find("missing.mocap"), std::string::npos);
+  EXPECT_EQ(run(ses, err), 2);  // neither --csv nor --bvh
+  EXPECT_NE(read_text(err).find("usage"), std::string::npos);
+}

@@ -1,0 +1,65 @@
+// A SampleSink for tests: keeps every sample and connection event, thread-safe.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "mocap/core/time.hpp"
+#include "mocap/drivers/device.hpp"
+
+namespace mocap::test {
+
+struct ConnectionEvent {
+  bool connected;
+  std::string reason;
+  int64_t t_ns;
+};
+
+class CollectSink : public SampleSink {
+ public:
+  void on_sample(const ImuSample& s) override {
+    std::lock_guard lk(mu_);
+    samples.push_back(s);
+  }
+  void on_raw(uint16_t, int64_t, std::span<const uint8_t> b) override {
+    std::lock_guard lk(mu_);
+    raw_bytes += b.size();
+  }
+  void on_connection(uint16_t, bool c, std::string_view why) override {
+    std::lock_guard lk(mu_);
+    events.push_back({c, std::string(why), monotonic_ns()});
+  }
+  std::vector<ImuSample> snapshot() const {
+    std::lock_guard lk(mu_);
+    return samples;
+  }
+  std::vector<ConnectionEvent> events_snapshot() const {
+    std::lock_guard lk(mu_);
+    return events;
+  }
+  std::size_t count() const {
+    std::lock_guard lk(mu_);
+    return samples.size();
+  }
+  /// Waits (bounded) until pred() holds; returns whether it did.
+  template <typename Pred>
+  bool wait_for(Pred pred, double timeout_s = 10) const {
+    const int64_t end = monotonic_ns() + static_cast<int64_t>(timeout_s * 1e9);
+    while (monotonic_ns() < end) {
+      if (pred()) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return pred();
+  }
+
+  mutable std::mutex mu_;
+  std::vector<ImuSample> samples;
+  std::vector<ConnectionEvent> events;
+  std::size_t raw_bytes = 0;
+};
+
+}  // namespace mocap::test

@@ -1,0 +1,70 @@
+// libFuzzer target for SessionReader. Even first byte: the input is read as a session file as
+// is (header, framing, limits). Odd first byte: the input is cut into blocks that get valid
+// framing and CRCs behind a valid header, so the payload decoders are reached too. The reader
+// must never crash, over-allocate, stop without saying why, or yield a non-finite pose.
+#include <zlib.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <vector>
+
+#include "mocap/daemon/session_reader.hpp"
+
+namespace ses = mocap::daemon::session;
+
+namespace {
+
+std::vector<uint8_t> framed(const uint8_t* data, size_t size) {
+  std::vector<uint8_t> out;
+  ses::SessionHeader h;
+  h.sensors = {{"a", "sim", 0, 0}};
+  std::string err;
+  ses::encode_file_header(h, out, &err);
+  size_t i = 0;
+  while (i + 3 <= size) {
+    const uint8_t type = data[i];
+    const size_t len = std::min<size_t>(data[i + 1] | (data[i + 2] << 8), size - i - 3);
+    i += 3;
+    uint8_t hdr[ses::kBlockHeaderBytes];
+    ses::encode_block_header(static_cast<ses::BlockType>(type % 5), static_cast<uint32_t>(len),
+                             hdr);
+    uLong crc = crc32(crc32(0L, hdr, sizeof hdr), data + i, static_cast<uInt>(len));
+    out.insert(out.end(), hdr, hdr + sizeof hdr);
+    out.insert(out.end(), data + i, data + i + len);
+    uint8_t c[4];
+    ses::put_u32(c, static_cast<uint32_t>(crc));
+    out.insert(out.end(), c, c + 4);
+    i += len;
+  }
+  return out;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  std::vector<uint8_t> bytes;
+  if (size > 0 && (data[0] & 1))
+    bytes = framed(data + 1, size - 1);
+  else
+    bytes.assign(data, data + size);
+  mocap::daemon::SessionReader reader;
+  std::string error;
+  if (!reader.open_bytes(bytes, &error)) {
+    if (error.empty()) std::abort();
+    return 0;
+  }
+  mocap::daemon::SessionReader::Block block;
+  while (reader.next(block)) {
+    if (block.type == ses::BlockType::pose) {
+      for (const auto& q : block.pose.q_earth_segment)
+        for (float v : q)
+          if (!std::isfinite(v)) std::abort();
+    }
+  }
+  if (reader.end() == mocap::daemon::SessionReader::End::not_reached) std::abort();
+  if (reader.end() != mocap::daemon::SessionReader::End::clean && reader.tail_reason().empty())
+    std::abort();
+  return 0;
+}

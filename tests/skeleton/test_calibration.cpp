@@ -1,0 +1,249 @@
+// Calibration: mounting rotations recovered for arbitrary mountings, heading sources, quality
+// refusal, heading reset, and the saved form.
+#include <gtest/gtest.h>
+
+#include "mocap/skeleton/calibration.hpp"
+#include "skeleton_test_util.hpp"
+
+namespace mocap {
+namespace {
+
+constexpr int64_t kMs = 1'000'000;
+
+struct Rig {
+  std::array<Eigen::Quaterniond, kSegmentCount> q_sensor_segment;  // true mounting
+  std::array<Eigen::Quaterniond, kSegmentCount> q_drift;           // per-sensor earth yaw error
+  explicit Rig(std::mt19937& rng) {
+    for (auto& q : q_sensor_segment)
+      q = test::random_rotation(rng);
+    q_drift.fill(Eigen::Quaterniond::Identity());
+  }
+  Eigen::Quaterniond sensor(int s, const Eigen::Quaterniond& q_earth_segment) const {
+    return (q_drift[s] * q_earth_segment * q_sensor_segment[s].conjugate()).normalized();
+  }
+};
+
+// Feeds a still pose (with optional jitter) for 2 s at 50 Hz.
+void capture(Calibrator& cal, const Rig& rig, CalibrationPose pose, double heading_rad,
+             std::mt19937& rng, double jitter_deg, int64_t t0, bool with_acc = false,
+             double acc_tilt_deg = 0) {
+  cal.start(pose, t0);
+  const Eigen::Quaterniond body = yaw_rotation(heading_rad);
+  for (int k = 0; k <= 100; ++k) {
+    const int64_t t = t0 + k * 20 * kMs;
+    for (int s = 0; s < kSegmentCount; ++s) {
+      const Eigen::Quaterniond seg =
+          body * q_body_segment_in_pose(pose, s) * test::random_small_rotation(rng, jitter_deg);
+      const Eigen::Quaterniond qs = rig.sensor(s, seg);
+      // Specific force: +g up in the earth frame, seen in the sensor frame (optionally tilted).
+      const Eigen::Vector3d f_earth =
+          Eigen::AngleAxisd(acc_tilt_deg * kDegToRad, Eigen::Vector3d::UnitX()) *
+          Eigen::Vector3d(0, 0, 9.80665);
+      const Eigen::Vector3d acc = qs.conjugate() * f_earth;
+      cal.add_sample(s, qs, t, with_acc ? &acc : nullptr);
+    }
+  }
+  EXPECT_TRUE(cal.done(t0 + 2000 * kMs));
+}
+
+double worst_segment_error_deg(const Calibration& c, const Rig& rig, std::mt19937& rng) {
+  double worst = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const auto pose = test::random_pose(rng, 60);
+    for (int s = 0; s < kSegmentCount; ++s)
+      worst = std::max(
+          worst, angle_between_deg(c.segment_from_sensor(s, rig.sensor(s, pose[s])), pose[s]));
+  }
+  return worst;
+}
+
+TEST(Calibration, NPoseRecoversArbitraryMountingsWithExplicitHeading) {
+  std::mt19937 rng(1);
+  Rig rig(rng);
+  CalibratorOptions o;
+  o.heading = HeadingSource::explicit_heading;
+  o.explicit_heading_deg = 37;
+  Calibrator cal(RigMapping::full(), o);
+  capture(cal, rig, CalibrationPose::npose, 37 * kDegToRad, rng, 0, 0);
+  const auto r = cal.finish();
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_NEAR(r.calibration.heading_deg, 37, 1e-9);
+  EXPECT_LT(worst_segment_error_deg(r.calibration, rig, rng), 1e-6);
+}
+
+TEST(Calibration, TPoseRecoversMountingsWithPelvisHeading) {
+  std::mt19937 rng(2);
+  Rig rig(rng);
+  rig.q_sensor_segment[0] = yaw_rotation(0);  // pelvis sensor: x forward (the source's premise)
+  Calibrator cal(RigMapping::full());         // heading from the pelvis sensor
+  capture(cal, rig, CalibrationPose::tpose, -120 * kDegToRad, rng, 0, 0);
+  const auto r = cal.finish();
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_NEAR(r.calibration.heading_deg, -120, 1e-6);
+  EXPECT_LT(worst_segment_error_deg(r.calibration, rig, rng), 1e-6);
+}
+
+TEST(Calibration, ArmSwingFindsHeadingWithEverySensorMountedArbitrarily) {
+  std::mt19937 rng(3);
+  Rig rig(rng);
+  CalibratorOptions o;
+  o.heading = HeadingSource::arm_swing;
+  Calibrator cal(RigMapping::full(), o);
+  const double heading = 71 * kDegToRad;
+  capture(cal, rig, CalibrationPose::npose, heading, rng, 0.3, 0);
+  auto r = cal.finish();
+  EXPECT_EQ(r.status, CalibrationStatus::need_tpose) << r.message;
+  capture(cal, rig, CalibrationPose::tpose, heading, rng, 0.3, 5000 * kMs);
+  r = cal.finish();
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_NEAR(r.calibration.heading_deg, 71, 0.5);
+  // Still-pose jitter of 0.3 deg leaves sub-degree mounting errors.
+  EXPECT_LT(worst_segment_error_deg(r.calibration, rig, rng), 1.0);
+  EXPECT_LT(r.calibration.motion_deg, 0.5);
+}
+
+TEST(Calibration, WrongHeadingSourceGivesWrongMountings) {
+  // Guard for the test above: with an arbitrarily mounted pelvis sensor, the pelvis heading is
+  // wrong and so are the mountings (the error the arm-swing source removes).
+  std::mt19937 rng(3);
+  Rig rig(rng);
+  Calibrator cal(RigMapping::full());
+  capture(cal, rig, CalibrationPose::npose, 0.4, rng, 0, 0);
+  const auto r = cal.finish();
+  if (r.ok()) {
+    EXPECT_GT(worst_segment_error_deg(r.calibration, rig, rng), 5.0);
+  }
+}
+
+TEST(Calibration, RefusesMotionAndInconsistentGravity) {
+  std::mt19937 rng(4);
+  Rig rig(rng);
+  {
+    Calibrator cal(RigMapping::full());
+    capture(cal, rig, CalibrationPose::npose, 0, rng, 8.0, 0);
+    const auto r = cal.finish();
+    EXPECT_EQ(r.status, CalibrationStatus::refused);
+    EXPECT_NE(r.message.find("moved"), std::string::npos) << r.message;
+  }
+  {
+    Calibrator cal(RigMapping::full());
+    capture(cal, rig, CalibrationPose::npose, 0, rng, 0, 0, true, 12.0);
+    const auto r = cal.finish();
+    EXPECT_EQ(r.status, CalibrationStatus::refused);
+    EXPECT_NE(r.message.find("gravity"), std::string::npos) << r.message;
+    EXPECT_NEAR(r.gravity_error_deg[5], 12.0, 0.01);
+  }
+  {
+    rig.q_sensor_segment[0] = Eigen::Quaterniond::Identity();
+    Calibrator cal(RigMapping::full());
+    capture(cal, rig, CalibrationPose::npose, 0, rng, 0, 0, true, 1.0);
+    const auto r = cal.finish();
+    EXPECT_NE(r.status, CalibrationStatus::refused) << r.message;
+  }
+  {
+    // A sensor that never reports.
+    RigMapping m = RigMapping::full();
+    Calibrator cal(m);
+    cal.start(CalibrationPose::npose, 0);
+    for (int k = 0; k < 100; ++k)
+      cal.add_sample(0, Eigen::Quaterniond::Identity(), k * 20 * kMs);
+    const auto r = cal.finish();
+    EXPECT_EQ(r.status, CalibrationStatus::refused);
+    EXPECT_NE(r.message.find("torso: only 0 samples"), std::string::npos) << r.message;
+  }
+}
+
+TEST(Calibration, HeadingResetRemovesPerSensorYawDrift) {
+  std::mt19937 rng(5);
+  Rig rig(rng);
+  CalibratorOptions o;
+  o.heading = HeadingSource::explicit_heading;
+  Calibrator cal(RigMapping::full(), o);
+  capture(cal, rig, CalibrationPose::npose, 0, rng, 0, 0);
+  auto r = cal.finish();
+  ASSERT_TRUE(r.ok());
+  Calibration c = r.calibration;
+  // Each sensor's heading drifts differently.
+  std::uniform_real_distribution<double> d(-30, 30);
+  for (auto& q : rig.q_drift)
+    q = yaw_rotation(d(rng) * kDegToRad);
+  const double drifted = worst_segment_error_deg(c, rig, rng);
+  EXPECT_GT(drifted, 10);
+  // Reset while standing in N-pose facing 25 deg.
+  std::array<Eigen::Quaterniond, kSegmentCount> now;
+  std::array<bool, kSegmentCount> have;
+  const Eigen::Quaterniond body = yaw_rotation(25 * kDegToRad);
+  for (int s = 0; s < kSegmentCount; ++s) {
+    now[s] = rig.sensor(s, body);
+    have[s] = true;
+  }
+  apply_heading_reset(c, now, have);
+  // Everything shares the pelvis's (drifted) heading now: joint rotations are right again.
+  for (int trial = 0; trial < 10; ++trial) {
+    const auto pose = test::random_pose(rng, 60);
+    std::array<Eigen::Quaterniond, kSegmentCount> est;
+    for (int s = 0; s < kSegmentCount; ++s)
+      est[s] = c.segment_from_sensor(s, rig.sensor(s, pose[s]));
+    for (int s = 1; s < kSegmentCount; ++s) {
+      const int p = kSegmentParent[s];
+      EXPECT_LT(angle_between_deg(est[p].conjugate() * est[s], pose[p].conjugate() * pose[s]),
+                1e-6);
+    }
+  }
+}
+
+TEST(Calibration, SerialisesAndParsesExactly) {
+  std::mt19937 rng(6);
+  Calibration c;
+  c.valid = true;
+  c.pose = CalibrationPose::tpose;
+  c.heading_source = HeadingSource::arm_swing;
+  c.heading_deg = 12.345678901234567;
+  c.motion_deg = 0.25;
+  for (int s = 0; s < kSegmentCount; s += 2) {
+    c.calibrated[s] = true;
+    c.q_sensor_segment[s] = test::random_rotation(rng);
+    c.q_correction[s] = yaw_rotation(0.1 * s);
+  }
+  const std::string text = serialize_calibration(c);
+  const Calibration back = parse_calibration(text);
+  EXPECT_EQ(back.valid, c.valid);
+  EXPECT_EQ(back.pose, c.pose);
+  EXPECT_EQ(back.heading_source, c.heading_source);
+  EXPECT_EQ(back.heading_deg, c.heading_deg);
+  for (int s = 0; s < kSegmentCount; ++s) {
+    EXPECT_EQ(back.calibrated[s], c.calibrated[s]);
+    if (!c.calibrated[s]) continue;
+    EXPECT_EQ(back.q_sensor_segment[s].coeffs(), c.q_sensor_segment[s].coeffs());
+    EXPECT_EQ(back.q_correction[s].coeffs(), c.q_correction[s].coeffs());
+  }
+  // File round trip.
+  const std::string path = std::string(MOCAP_BINARY_DIR) + "/test_calibration.toml";
+  save_calibration(c, path);
+  EXPECT_EQ(serialize_calibration(load_calibration(path)), text);
+}
+
+TEST(Calibration, ParseErrorsNameTheProblemAndPlace) {
+  auto err = [](std::string_view text) {
+    try {
+      parse_calibration(text, "cal.toml");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(err("[calibration]\nversion = 1\n[segment.elbow]\nq_sensor_segment=[1,0,0,0]\n")
+                .find("cal.toml:3:"),
+            std::string::npos);
+  EXPECT_NE(err("[calibration]\nversion = 1\n[segment.elbow]\n").find("unknown segment 'elbow'"),
+            std::string::npos);
+  EXPECT_NE(err("[calibration]\nversion = 1\n[segment.head]\nq_sensor_segment=[2,0,0,0]\n")
+                .find("not a unit quaternion"),
+            std::string::npos);
+  EXPECT_NE(err("[calibration]\nversion = 2\n").find("version"), std::string::npos);
+  EXPECT_NE(err("[calibration\n").find("cal.toml:1:"), std::string::npos);
+  EXPECT_NE(err("").find("missing [calibration]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mocap

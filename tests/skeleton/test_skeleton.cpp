@@ -1,0 +1,179 @@
+// Skeleton solver: forward kinematics matches the body model, calibration is applied, untracked
+// segments are interpolated, limits are reported or clamped, bad input never reaches the pose,
+// output is deterministic.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "mocap/skeleton/skeleton.hpp"
+#include "skeleton_test_util.hpp"
+
+namespace mocap {
+namespace {
+
+constexpr int64_t kMs = 1'000'000;
+
+Eigen::Vector3d pos(const PoseFrame& f, int s) {
+  return Eigen::Vector3d(f.p_earth_segment_m[s][0], f.p_earth_segment_m[s][1],
+                         f.p_earth_segment_m[s][2]);
+}
+
+TEST(Skeleton, NPoseMatchesReferencePositions) {
+  const BodyModel model(BodyModelConfig{1.80});
+  Skeleton sk(model, default_joint_limits(), RigMapping::full());
+  for (int s = 0; s < kSegmentCount; ++s)
+    sk.set_sensor_orientation(s, Eigen::Quaterniond::Identity(), 0);
+  PoseFrame f;
+  reset_pose(f);
+  sk.solve(f);
+  const auto ref = reference_joint_positions(model.dimensions());
+  for (int s = 0; s < kSegmentCount; ++s) {
+    EXPECT_LT((pos(f, s) - ref[s]).norm(), 1e-5) << kSegmentNames[s];
+    EXPECT_EQ(f.segment_flags[s] & kSegTracked, kSegTracked);
+    EXPECT_EQ(f.joint_violation_deg[s], 0);
+  }
+  EXPECT_EQ(f.flags & kFrameCalibrated, 0u);
+}
+
+TEST(Skeleton, ForwardKinematicsFollowsSensorsThroughCalibration) {
+  std::mt19937 rng(11);
+  const BodyModel model;
+  std::array<Eigen::Quaterniond, kSegmentCount> mount;
+  for (auto& q : mount)
+    q = test::random_rotation(rng);
+  Calibration c;
+  c.valid = true;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    c.calibrated[s] = true;
+    c.q_sensor_segment[s] = mount[s];
+  }
+  Skeleton sk(model, default_joint_limits(), RigMapping::full());
+  sk.set_calibration(c);
+  const auto pose = test::random_pose(rng, 40);
+  for (int s = 0; s < kSegmentCount; ++s)
+    sk.set_sensor_orientation(s, pose[s] * mount[s].conjugate(), 100 * kMs);
+  PoseFrame f;
+  reset_pose(f);
+  sk.solve(f);
+  EXPECT_EQ(f.flags & kFrameCalibrated, uint32_t{kFrameCalibrated});
+  EXPECT_EQ(f.t_ns, 100 * kMs);
+  for (int s = 0; s < kSegmentCount; ++s) {
+    EXPECT_LT(angle_between_deg(sk.q_earth_segment()[s], pose[s]), 1e-6);
+    const int p = kSegmentParent[s];
+    if (p < 0) continue;
+    // Position: parent position + parent orientation * joint offset (thesis Fig. 29).
+    const Eigen::Vector3d expect = sk.p_earth_segment_m()[p] + pose[p] * model.joint_offset_m(s);
+    EXPECT_LT((sk.p_earth_segment_m()[s] - expect).norm(), 1e-9);
+    EXPECT_LT(angle_between_deg(sk.q_parent_segment()[s], pose[p].conjugate() * pose[s]), 1e-6);
+    EXPECT_LT(angle_between_deg(from_wxyz(f.q_parent_segment[s]), pose[p].conjugate() * pose[s]),
+              0.01);
+  }
+}
+
+TEST(Skeleton, UntrackedSegmentsAreInterpolatedOrFollowTheParent) {
+  RigMapping rig = RigMapping::full();
+  rig.sensor_for_segment[index(Segment::torso)] = -1;
+  rig.sensor_for_segment[index(Segment::hand_l)] = -1;
+  Skeleton sk(BodyModel{}, default_joint_limits(), rig);
+  const Eigen::Quaterniond bent = axis_rotation(1, 60 * kDegToRad);
+  for (int s = 0; s < kSegmentCount; ++s)
+    sk.set_sensor_orientation(
+        s,
+        s == index(Segment::neck) || s == index(Segment::head) || s == index(Segment::forearm_l)
+            ? bent
+            : Eigen::Quaterniond::Identity(),
+        0);
+  PoseFrame f;
+  sk.solve(f);
+  const int torso = index(Segment::torso);
+  EXPECT_LT(angle_between_deg(sk.q_earth_segment()[torso], axis_rotation(1, 30 * kDegToRad)), 1e-9);
+  EXPECT_EQ(f.segment_flags[torso] & kSegInferred, uint32_t{kSegInferred});
+  EXPECT_LT(angle_between_deg(sk.q_earth_segment()[index(Segment::hand_l)], bent), 1e-9);
+  EXPECT_EQ(f.segment_flags[index(Segment::pelvis)] & kSegTracked, uint32_t{kSegTracked});
+}
+
+TEST(Skeleton, ReportsOrClampsViolations) {
+  for (LimitPolicy policy : {LimitPolicy::report, LimitPolicy::clamp}) {
+    SkeletonOptions o;
+    o.limit_policy = policy;
+    Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full(), o);
+    for (int s = 0; s < kSegmentCount; ++s)
+      sk.set_sensor_orientation(s, Eigen::Quaterniond::Identity(), 0);
+    // Knee bent forward by 35 deg: 30 deg beyond the 5 deg hyperextension.
+    sk.set_sensor_orientation(index(Segment::shank_l), axis_rotation(1, -35 * kDegToRad), 0);
+    PoseFrame f;
+    sk.solve(f);
+    const int k = index(Segment::shank_l);
+    EXPECT_NEAR(f.joint_violation_deg[k], 30, 1e-3);
+    EXPECT_TRUE(f.segment_flags[k] & kSegLimitViolated);
+    EXPECT_EQ(f.joint_violation_deg[index(Segment::shank_r)], 0);
+    if (policy == LimitPolicy::clamp) {
+      EXPECT_TRUE(f.segment_flags[k] & kSegClamped);
+      EXPECT_NEAR(angle_between_deg(sk.q_earth_segment()[k], axis_rotation(1, -5 * kDegToRad)), 0,
+                  1e-6);
+    } else {
+      EXPECT_FALSE(f.segment_flags[k] & kSegClamped);
+      EXPECT_NEAR(angle_between_deg(sk.q_earth_segment()[k], axis_rotation(1, -35 * kDegToRad)), 0,
+                  1e-6);
+    }
+    // The drift signal accumulates while the violation persists.
+    for (int t = 1; t <= 200; ++t) {
+      sk.set_sensor_orientation(k, axis_rotation(1, -35 * kDegToRad), t * 20 * kMs);
+      sk.solve(f);
+    }
+    EXPECT_GT(sk.drift_signal_deg(), 20);
+    EXPECT_LT(sk.drift_signal_deg(), 30.001);
+  }
+}
+
+TEST(Skeleton, RejectsNonFiniteInputAndFlagsStaleSensors) {
+  Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full());
+  for (int s = 0; s < kSegmentCount; ++s)
+    sk.set_sensor_orientation(s, Eigen::Quaterniond::Identity(), 0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  sk.set_sensor_orientation(3, Eigen::Quaterniond(nan, 0, 0, 0), 10 * kMs);
+  sk.set_sensor_orientation(4, Eigen::Quaterniond(0, 0, 0, 0), 10 * kMs);
+  sk.set_sensor_orientation(99, Eigen::Quaterniond::Identity(), 10 * kMs);
+  EXPECT_EQ(sk.rejected_samples(), 3u);
+  for (int s = 0; s < kSegmentCount; ++s)
+    if (s != 7) sk.set_sensor_orientation(s, Eigen::Quaterniond::Identity(), 500 * kMs);
+  PoseFrame f;
+  sk.solve(f);
+  for (int s = 0; s < kSegmentCount; ++s) {
+    for (float v : f.q_earth_segment[s])
+      EXPECT_TRUE(std::isfinite(v));
+    for (float v : f.p_earth_segment_m[s])
+      EXPECT_TRUE(std::isfinite(v));
+  }
+  EXPECT_TRUE(f.segment_flags[7] & kSegStale);
+  EXPECT_FALSE(f.segment_flags[6] & kSegStale);
+}
+
+TEST(Skeleton, DeterministicBitIdenticalFrames) {
+  std::mt19937 rng(12);
+  std::vector<std::array<Eigen::Quaterniond, kSegmentCount>> poses;
+  for (int k = 0; k < 50; ++k)
+    poses.push_back(test::random_pose(rng, 70));
+  auto run = [&](std::vector<PoseFrame>& out) {
+    SkeletonOptions o;
+    o.limit_policy = LimitPolicy::clamp;
+    Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full(), o);
+    for (size_t k = 0; k < poses.size(); ++k) {
+      for (int s = 0; s < kSegmentCount; ++s)
+        sk.set_sensor_orientation(s, poses[k][s], static_cast<int64_t>(k) * 10 * kMs);
+      PoseFrame f;
+      reset_pose(f);
+      sk.solve(f);
+      out.push_back(f);
+    }
+  };
+  std::vector<PoseFrame> a, b;
+  run(a);
+  run(b);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k)
+    EXPECT_EQ(std::memcmp(&a[k], &b[k], sizeof(PoseFrame)), 0);
+}
+
+}  // namespace
+}  // namespace mocap
