@@ -82,7 +82,8 @@ double publish_ns(const std::string& name, int n, bool with_reader, long& reads)
   reset_pose(first);
   writer.publish(first);
   // Time the writer only once the reader is really copying frames.
-  while (with_reader && read_count.load() < 1000) std::this_thread::yield();
+  while (with_reader && read_count.load() < 1000)
+    std::this_thread::yield();
   PoseFrame f;
   reset_pose(f);
   const auto start = clock_type::now();

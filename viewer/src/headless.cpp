@@ -17,7 +17,8 @@ int run_screenshot(const ViewerOptions& o) {
   int rc = 0;
   {
     Offscreen target(o.width, o.height);
-    View view(body_dimensions_from_height(o.height_m));
+    View view(source->dimensions() ? *source->dimensions()
+                                   : body_dimensions_from_height(o.height_m));
     view.settings = o.settings;
     view.camera = OrbitCamera::framing(o.avatars);
     const auto start = std::chrono::steady_clock::now();
@@ -25,8 +26,8 @@ int run_screenshot(const ViewerOptions& o) {
       return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     };
     // Live sources (daemon, network) run on the wall clock and get a few seconds to deliver a
-    // first pose; the synthetic source steps a fixed 60 Hz clock so images are reproducible.
-    const bool live = o.source != "synthetic";
+    // first pose; the synthetic and file sources step a fixed 60 Hz clock (reproducible images).
+    const bool live = o.source == "shm" || o.source == "connect";
     if (live) {
       while (!source->poll(wall_s(), view.frames) && wall_s() < o.wait_s)
         std::this_thread::sleep_for(std::chrono::milliseconds(5));

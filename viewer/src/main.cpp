@@ -4,6 +4,7 @@
 
 #include "mocap/core/cli_args.hpp"
 #include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/viewer/bvh_source.hpp"
 #include "mocap/viewer/net_source.hpp"
 #include "mocap/viewer/shm_source.hpp"
 #include "mocap/viewer/synthetic_source.hpp"
@@ -18,9 +19,12 @@ std::unique_ptr<PoseSource> make_source(const ViewerOptions& o) {
     return std::make_unique<ShmSource>(o.shm_name.empty() ? default_posture_shm_name()
                                                           : o.shm_name);
   if (o.source == "connect") return std::make_unique<NetSource>(o.connect);
-  if (o.source == "play")
+  if (o.source == "play") {
+    if (o.play.size() >= 4 && o.play.compare(o.play.size() - 4, 4, ".bvh") == 0)
+      return std::make_unique<BvhSource>(o.play);
     throw std::runtime_error("--play " + o.play +
-                             ": file playback is not supported by this build yet");
+                             ": only BVH files (.bvh) can be played back so far");
+  }
   throw std::runtime_error("unknown --source '" + o.source + "' (shm, synthetic)");
 }
 
@@ -106,7 +110,7 @@ int main(int argc, char** argv) {
   o.settings.hud = !cli.has("no-hud");
   o.settings.labels = !cli.has("no-labels");
   o.settings.shadows = !cli.has("no-shadows");
-  o.settings.follow = cli.has("follow");
+  o.settings.follow = cli.has("follow") || o.source == "play";  // files walk off anywhere
 
   try {
     if (o.bench) return run_bench(o);
