@@ -1,7 +1,10 @@
 // mocap-viewer --bench: frame rates at the window size with one avatar and with a crowd of 150
 // (synthetic poses, instanced), rendered to the window with vsync off; and the cost of the
 // daemon's posture publish with and without a viewer reading at full speed (wait-free writer).
+#include <sys/resource.h>
 #include <unistd.h>
+
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -18,8 +21,16 @@ namespace {
 
 using clock_type = std::chrono::steady_clock;
 
+double process_cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);  // all threads, llvmpipe's rasteriser threads included
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 struct FpsResult {
   double fps = 0;
+  double frames_per_cpu_s = 0;  ///< frames per CPU-second of this process: load-independent
   int frames = 0;
   size_t capsules = 0;
 };
@@ -50,6 +61,7 @@ FpsResult measure_fps(GLFWwindow* window, const ViewerOptions& o, int avatars, b
     frame(i);  // warm up (shader compilation, buffers)
   glFinish();
   FpsResult r;
+  const double cpu0 = process_cpu_s();
   const auto start = clock_type::now();
   double elapsed = 0;
   while (elapsed < o.bench_seconds) {
@@ -59,13 +71,17 @@ FpsResult measure_fps(GLFWwindow* window, const ViewerOptions& o, int avatars, b
   glFinish();
   elapsed = std::chrono::duration<double>(clock_type::now() - start).count();
   r.fps = r.frames / elapsed;
+  r.frames_per_cpu_s = r.frames / std::max(1e-9, process_cpu_s() - cpu0);
   r.capsules = view.capsule_count();
   return r;
 }
 
 /// Mean time of PostureWriter::publish over `n` frames, ns, optionally with a reader thread
 /// copying frames as fast as it can (what a viewer does, only harder).
-double publish_ns(const std::string& name, int n, bool with_reader, long& reads) {
+/// `reader_period_us` 0: the reader copies frames back to back; > 0: it sleeps that long between
+/// copies (a viewer at 1000 frames/s).
+double publish_ns(const std::string& name, int n, bool with_reader, long& reads,
+                  int reader_period_us = 0) {
   PostureWriter writer(name);
   PostureReader reader(name);
   std::atomic<bool> stop{false};
@@ -74,8 +90,11 @@ double publish_ns(const std::string& name, int n, bool with_reader, long& reads)
   if (with_reader) {
     t = std::thread([&] {
       PoseFrame f;
-      while (!stop.load(std::memory_order_relaxed))
+      while (!stop.load(std::memory_order_relaxed)) {
         if (reader.read(f)) read_count.fetch_add(1, std::memory_order_relaxed);
+        if (reader_period_us > 0)
+          std::this_thread::sleep_for(std::chrono::microseconds(reader_period_us));
+      }
     });
   }
   PoseFrame first;
@@ -117,16 +136,22 @@ int run_bench(const ViewerOptions& o) {
   const int n = 200000;
   const double alone_ns = publish_ns(shm, n, false, reads_alone);
   const double shared_ns = publish_ns(shm, n, true, reads);
+  long viewer_reads = 0;
+  const double viewer_ns = publish_ns(shm, n, true, viewer_reads, 1000);
   std::printf(
       "{\"renderer\": \"%s\", \"width\": %d, \"height\": %d, \"vsync\": false,\n"
-      " \"one_avatar\": {\"fps\": %.1f, \"offscreen_fps\": %.1f, \"capsules\": %zu, "
+      " \"one_avatar\": {\"fps\": %.1f, \"offscreen_fps\": %.1f, \"offscreen_frames_per_cpu_s\": "
+      "%.1f, \"capsules\": %zu, "
       "\"goal_fps\": 120},\n"
-      " \"crowd\": {\"avatars\": %d, \"fps\": %.1f, \"offscreen_fps\": %.1f, \"capsules\": %zu, "
+      " \"crowd\": {\"avatars\": %d, \"fps\": %.1f, \"offscreen_fps\": %.1f, "
+      "\"offscreen_frames_per_cpu_s\": %.1f, \"capsules\": %zu, "
       "\"goal_fps\": 30},\n"
       " \"posture_publish\": {\"frames\": %d, \"ns_alone\": %.1f, \"ns_with_reader\": %.1f, "
-      "\"ratio\": %.2f, \"reader_frames\": %ld}}\n",
-      renderer.c_str(), o.width, o.height, one.fps, one_off.fps, one.capsules, crowd_n, crowd.fps,
-      crowd_off.fps, crowd.capsules, n, alone_ns, shared_ns, shared_ns / alone_ns, reads);
+      "\"ratio\": %.2f, \"reader_frames\": %ld,\n"
+      "  \"ns_with_1khz_reader\": %.1f, \"ratio_1khz\": %.2f}}\n",
+      renderer.c_str(), o.width, o.height, one.fps, one_off.fps, one_off.frames_per_cpu_s,
+      one.capsules, crowd_n, crowd.fps, crowd_off.fps, crowd_off.frames_per_cpu_s, crowd.capsules,
+      n, alone_ns, shared_ns, shared_ns / alone_ns, reads, viewer_ns, viewer_ns / alone_ns);
   return 0;
 }
 
