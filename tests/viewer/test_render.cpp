@@ -32,8 +32,12 @@ class Render : public ::testing::Test {
 
   /// Runs mocap-viewer with `args`; returns its exit status.
   static int run(const std::string& args) {
-    const std::string cmd =
-        std::string(MOCAP_VIEWER_EXE) + " " + args + " 2>/tmp/mocap-viewer-render.err";
+    // Under ASan: GLFW dlcloses libGL at exit, so the GL driver's own leaks are reported from an
+    // "<unknown module>" that tests/lsan.supp cannot name; leak checking stays on for the
+    // viewer's code in test_viewer_core.
+    const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS}:detect_leaks=0\" " +
+                            std::string(MOCAP_VIEWER_EXE) + " " + args +
+                            " 2>/tmp/mocap-viewer-render.err";
     const int rc = std::system(cmd.c_str());
     return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
   }
