@@ -34,7 +34,7 @@ enum SampleFlag : uint8_t {
 /// scale when the device does not say: only direction and relative norm matter to the filter).
 struct ImuSample {
   int64_t t_host_ns = 0;    ///< host CLOCK_MONOTONIC time of the measurement, ns (drift-tracked)
-  int64_t t_device_ns = 0;  ///< device clock, unwrapped, ns since the device's first sample
+  int64_t t_device_ns = 0;  ///< device clock, unwrapped, ns (origin is the device's own)
   uint32_t seq = 0;         ///< per-sensor sample number, unwrapped device counter when known
   uint16_t sensor_id = 0;   ///< index of the sensor in the rig
   uint8_t valid = 0;        ///< SampleField bits
