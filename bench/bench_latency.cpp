@@ -1,13 +1,194 @@
-// mocap bench latency: not yet implemented (placeholder replaced by its issue's work).
+// mocap bench latency: bytes written to a simulated WitMotion sensor's pty -> the JSON line that
+// carries that sample, received by a TCP client on loopback. A spawned mocapd (real drivers,
+// pipeline with publish_every_sample, JSON server) reads N ptys; one writer thread writes the
+// sensors round-robin, evenly spread over each sample period, stamping monotonic time at each
+// write; a client thread stamps each received line. In per-sample mode the frame a sample
+// triggers shows that sensor with age_ms 0.0, so the k-th such line of sensor i is matched to
+// the k-th write of sensor i (first such line received after the write).
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
 #include <cstdio>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "bench.hpp"
+#include "daemon_harness.hpp"
+#include "mocap/core/cli_args.hpp"
+#include "mocap/core/time.hpp"
 
 namespace mocap::bench {
 
-int run_latency(int, char**) {
-  std::fprintf(stderr, "mocap bench latency: not implemented yet\n");
-  return 2;
+namespace {
+
+struct Line {
+  int64_t t_recv_ns;
+  uint32_t zero_age_mask;  ///< sensors shown with age_ms 0.0 (the sample that made the frame)
+};
+
+/// Bit i set if sensor i's age_ms is printed as 0.0.
+uint32_t zero_ages(const char* b, const char* e) {
+  static constexpr char kSensors[] = "\"sensors\":[";
+  static constexpr char kAge[] = "\"age_ms\":";
+  const std::string_view line(b, static_cast<size_t>(e - b));
+  size_t pos = line.find(kSensors);
+  uint32_t mask = 0;
+  for (int i = 0; pos != std::string_view::npos && i < 32; ++i) {
+    pos = line.find(kAge, pos);
+    if (pos == std::string_view::npos) break;
+    pos += sizeof kAge - 1;
+    if (line.compare(pos, 4, "0.0,") == 0 || line.compare(pos, 4, "0.0}") == 0) mask |= 1u << i;
+  }
+  return mask;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return -1;
+  std::sort(v.begin(), v.end());
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5));
+  return v[k];
+}
+
+}  // namespace
+
+int run_latency(int argc, char** argv) {
+  CliArgs args;
+  args.option("sensors", "number of simulated sensors (default 17, max 32)")
+      .option("rate", "sample rate per sensor in Hz (default 200)")
+      .option("seconds", "measured duration (default 10)")
+      .flag("help", "show this help");
+  if (!args.parse(argc, argv) || args.has("help") || !args.positional().empty()) {
+    std::fprintf(stderr, "usage: mocap bench latency [--sensors N] [--rate HZ] [--seconds S]\n%s",
+                 args.help().c_str());
+    return args.has("help") ? 0 : 2;
+  }
+  double sensors_d = 17, rate = 200, seconds = 10;
+  args.get_double("sensors", sensors_d);
+  args.get_double("rate", rate);
+  args.get_double("seconds", seconds);
+  const int sensors = static_cast<int>(sensors_d);
+  if (sensors < 1 || sensors > 32 || !(rate > 0 && rate <= 2000) || !(seconds > 0)) {
+    std::fprintf(stderr,
+                 "mocap bench latency: need 1..32 sensors, 0 < rate <= 2000, seconds > 0\n");
+    return 2;
+  }
+  const double load_before = load_average_1m();
+  RigOptions ro;
+  ro.sensors = sensors;
+  ro.rate_hz = rate;
+  ro.publish_every_sample = true;
+  try {
+    DaemonRig rig(ro);
+    if (!rig.wait_streaming(15)) {
+      std::fprintf(stderr, "mocap bench latency: sensors not streaming within 15 s (log %s)\n",
+                   rig.log_path().c_str());
+      return 1;
+    }
+    const int fd = connect_loopback(rig.json_port(), 5);
+    if (fd < 0) {
+      std::fprintf(stderr, "mocap bench latency: cannot connect to the JSON stream\n");
+      return 1;
+    }
+    // Client: stamps each line as its last byte arrives.
+    std::vector<Line> lines;
+    lines.reserve(static_cast<size_t>(sensors * rate * (seconds + 2) * 1.5 + 1000));
+    std::atomic<bool> stop{false};
+    std::thread client([&] {
+      std::vector<char> buf(1 << 20);
+      size_t have = 0;
+      while (!stop) {
+        const ssize_t n = ::read(fd, buf.data() + have, buf.size() - have);
+        if (n <= 0) break;
+        const int64_t now = monotonic_ns();
+        have += static_cast<size_t>(n);
+        size_t start = 0;
+        for (size_t i = have - static_cast<size_t>(n); i < have; ++i) {
+          if (buf[i] != '\n') continue;
+          lines.push_back({now, zero_ages(buf.data() + start, buf.data() + i)});
+          start = i + 1;
+        }
+        std::memmove(buf.data(), buf.data() + start, have - start);
+        have -= start;
+        if (have == buf.size()) have = 0;  // a line longer than 1 MB: drop it
+      }
+    });
+    // Writer: sensor i at t0 + k/rate + i/(rate*N).
+    const int64_t period_ns = static_cast<int64_t>(1e9 / rate);
+    const int64_t spacing_ns = period_ns / sensors;
+    const int64_t periods = static_cast<int64_t>(seconds * rate);
+    std::vector<std::vector<int64_t>> writes(static_cast<size_t>(sensors));
+    for (auto& w : writes)
+      w.reserve(static_cast<size_t>(periods));
+    uint64_t short_writes = 0;
+    const int64_t t0 = monotonic_ns() + 200'000'000;
+    for (int64_t k = 0; k < periods; ++k) {
+      for (int i = 0; i < sensors; ++i) {
+        const int64_t due = t0 + k * period_ns + i * spacing_ns;
+        timespec ts{static_cast<time_t>(due / 1'000'000'000),
+                    static_cast<long>(due % 1'000'000'000)};
+        ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+        const int64_t w = monotonic_ns();
+        if (!rig.write_sample(i, 1'000'000'000 + k * period_ns)) ++short_writes;
+        writes[static_cast<size_t>(i)].push_back(w);
+      }
+      if (k % 64 == 0) rig.answer_host();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    const std::string status = rig.status();
+    stop = true;
+    ::shutdown(fd, SHUT_RDWR);
+    client.join();
+    ::close(fd);
+    rig.stop();
+    // Match: per sensor, the k-th write -> the first later line showing that sensor at age 0.
+    std::vector<double> lat_ms;
+    lat_ms.reserve(static_cast<size_t>(sensors * periods));
+    uint64_t unmatched = 0;
+    for (int i = 0; i < sensors; ++i) {
+      size_t li = 0;
+      for (const int64_t w : writes[static_cast<size_t>(i)]) {
+        while (li < lines.size() &&
+               (lines[li].t_recv_ns < w || !(lines[li].zero_age_mask & (1u << i))))
+          ++li;
+        if (li == lines.size()) {
+          ++unmatched;
+          continue;
+        }
+        lat_ms.push_back((lines[li].t_recv_ns - w) * 1e-6);
+        ++li;
+      }
+    }
+    const double p50 = percentile(lat_ms, 0.50), p99 = percentile(lat_ms, 0.99);
+    const double mx = lat_ms.empty() ? -1 : *std::max_element(lat_ms.begin(), lat_ms.end());
+    const uint64_t written = static_cast<uint64_t>(sensors) * static_cast<uint64_t>(periods);
+    const bool pass = !lat_ms.empty() && unmatched == 0 && p50 <= 0.3 && p99 <= 1.0;
+    // ring_drops from the daemon's status line ("ring_drops":N).
+    long long ring_drops = -1;
+    if (auto p = status.find("\"ring_drops\":"); p != std::string::npos)
+      ring_drops = std::atoll(status.c_str() + p + 13);
+    std::printf(
+        "{\"benchmark\":\"latency\",\"path\":\"pty bytes -> mocapd (witmotion driver, pipeline "
+        "publish_every_sample, JSON server) -> TCP client on loopback\",\n"
+        " \"params\":{\"sensors\":%d,\"rate_hz\":%g,\"seconds\":%g},\n"
+        " \"written\":%llu,\"matched\":%zu,\"unmatched\":%llu,\"short_writes\":%llu,"
+        "\"json_lines\":%zu,\"daemon_ring_drops\":%lld,\n"
+        " \"latency_ms\":{\"p50\":%.4f,\"p99\":%.4f,\"max\":%.4f},\n"
+        " \"goal\":{\"p50_ms\":0.3,\"p99_ms\":1.0},\"pass\":%s,\n"
+        " \"load_average_1m\":{\"before\":%.2f,\"after\":%.2f}}\n",
+        sensors, rate, seconds, static_cast<unsigned long long>(written), lat_ms.size(),
+        static_cast<unsigned long long>(unmatched), static_cast<unsigned long long>(short_writes),
+        lines.size(), ring_drops, p50, p99, mx, pass ? "true" : "false", load_before,
+        load_average_1m());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mocap bench latency: %s\n", e.what());
+    return 1;
+  }
 }
 
 }  // namespace mocap::bench

@@ -1,0 +1,244 @@
+// DaemonRig: ptys + WitMotion encoders + a spawned mocapd; /proc readings (daemon_harness.hpp).
+#include "daemon_harness.hpp"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/core/time.hpp"
+
+namespace mocap::bench {
+
+namespace {
+
+int free_tcp_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof a;
+  int port = 0;
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0)
+    port = ntohs(a.sin_port);
+  ::close(fd);
+  if (port == 0) throw std::runtime_error("cannot find a free TCP port");
+  return port;
+}
+
+std::string mocapd_path() {
+  const auto self = std::filesystem::read_symlink("/proc/self/exe");
+  const auto p = self.parent_path() / "mocapd";
+  if (!std::filesystem::exists(p))
+    throw std::runtime_error("mocapd not found next to " + self.string());
+  return p.string();
+}
+
+double status_field_mb(pid_t pid, const char* key) {
+  std::ifstream f("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  const size_t n = std::strlen(key);
+  while (std::getline(f, line))
+    if (line.compare(0, n, key) == 0) return std::atof(line.c_str() + n + 1) / 1024.0;
+  return -1;
+}
+
+}  // namespace
+
+DaemonRig::DaemonRig(const RigOptions& o) : opt_(o) {
+  char tmpl[] = "/tmp/mocap-bench-XXXXXX";
+  if (!::mkdtemp(tmpl)) throw std::runtime_error("mkdtemp failed");
+  dir_ = tmpl;
+  ctl_ = dir_ + "/ctl.sock";
+  log_ = dir_ + "/mocapd.log";
+  port_ = free_tcp_port();
+  std::ostringstream cfg;
+  cfg << "[daemon]\nlog_level = \"warn\"\ncontrol_socket = \"" << ctl_ << "\"\n"
+      << "[pipeline]\nrate_hz = " << opt_.frame_rate_hz
+      << "\npublish_every_sample = " << (opt_.publish_every_sample ? "true" : "false") << "\n"
+      << "[outputs.json]\nenabled = true\nport = " << port_ << "\n"
+      << "[outputs.posture]\nenabled = false\n";
+  EncoderOptions eo;
+  eo.rate_hz = opt_.rate_hz;
+  for (int i = 0; i < opt_.sensors; ++i) {
+    ptys_.push_back(std::make_unique<PtyEndpoint>());
+    enc_.push_back(make_encoder("witmotion", eo));
+    cfg << "[[sensor]]\nname = \"s" << i << "\"\ndriver = \"witmotion\"\nport = \""
+        << ptys_.back()->slave_path() << "\"\n";
+    if (i < kSegmentCount) cfg << "segment = \"" << kSegmentNames[i] << "\"\n";
+  }
+  const std::string cfg_path = dir_ + "/rig.toml";
+  std::ofstream(cfg_path) << cfg.str();
+  const std::string exe = mocapd_path();
+  pid_ = ::fork();
+  if (pid_ < 0) throw std::runtime_error("fork failed");
+  if (pid_ == 0) {
+    const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+    }
+    ::execl(exe.c_str(), exe.c_str(), "--config", cfg_path.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  bytes_.reserve(256);
+}
+
+DaemonRig::~DaemonRig() {
+  stop();
+  std::error_code ec;
+  std::filesystem::remove_all(dir_, ec);
+}
+
+int DaemonRig::stop() {
+  if (pid_ > 0) {
+    ::kill(pid_, SIGTERM);
+    int st = 0;
+    ::waitpid(pid_, &st, 0);
+    exit_status_ = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    pid_ = -1;
+  }
+  return exit_status_;
+}
+
+bool DaemonRig::write_sample(int i, int64_t t_device_ns) {
+  ImuSample s;
+  s.t_device_ns = t_device_ns;
+  s.sensor_id = static_cast<uint16_t>(i);
+  const double ph = t_device_ns * 1e-9;
+  s.gyr_rad_s = Eigen::Vector3d(0.1 * std::sin(ph), 0.05, -0.02);
+  s.acc_m_s2 = Eigen::Vector3d(0.1, -0.05, 9.81);
+  s.mag_uT = Eigen::Vector3d(20, 0, -40);
+  s.q_device_sensor = Eigen::Quaterniond::Identity();
+  s.valid = kFieldGyr | kFieldAcc | kFieldMag | kFieldQuat;
+  bytes_.clear();
+  enc_[i]->encode(s, bytes_);
+  return ptys_[i]->write(bytes_);
+}
+
+void DaemonRig::answer_host() {
+  uint8_t buf[256];
+  for (size_t i = 0; i < ptys_.size(); ++i) {
+    const size_t n = ptys_[i]->read(std::span<uint8_t>(buf, sizeof buf), 0);
+    if (n == 0) continue;
+    reply_.clear();
+    enc_[i]->handle_host_bytes(std::span<const uint8_t>(buf, n), reply_);
+    if (!reply_.empty()) ptys_[i]->write(reply_);
+  }
+}
+
+std::string DaemonRig::status() const {
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::snprintf(a.sun_path, sizeof a.sun_path, "%s", ctl_.c_str());
+  std::string out;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+      ::write(fd, "status\n", 7) == 7) {
+    char buf[4096];
+    for (;;) {
+      const ssize_t n = ::read(fd, buf, sizeof buf);
+      if (n <= 0) break;
+      out.append(buf, static_cast<size_t>(n));
+      if (out.back() == '\n') break;
+    }
+  }
+  ::close(fd);
+  return out;
+}
+
+bool DaemonRig::wait_streaming(double timeout_s) {
+  const int64_t end = monotonic_ns() + static_cast<int64_t>(timeout_s * 1e9);
+  int64_t t_dev = 0;
+  while (monotonic_ns() < end) {
+    // Keep the sensors talking while the daemon opens them.
+    for (int i = 0; i < opt_.sensors; ++i)
+      write_sample(i, t_dev);
+    t_dev += 10'000'000;
+    answer_host();
+    const std::string st = status();
+    if (!st.empty()) {
+      size_t streaming = 0, pos = 0;
+      while ((pos = st.find("\"streaming\"", pos)) != std::string::npos) {
+        ++streaming;
+        ++pos;
+      }
+      if (streaming == static_cast<size_t>(opt_.sensors)) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
+double process_cpu_s(pid_t pid) {
+  std::ifstream f("/proc/" + std::to_string(pid) + "/stat");
+  std::string s((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const auto rp = s.rfind(')');
+  if (rp == std::string::npos) return -1;
+  std::istringstream in(s.substr(rp + 2));
+  std::string field;
+  unsigned long long utime = 0, stime = 0;
+  // Fields after the command: state(3) ... utime(14) stime(15).
+  for (int k = 3; k <= 15 && in >> field; ++k) {
+    if (k == 14) utime = std::stoull(field);
+    if (k == 15) stime = std::stoull(field);
+  }
+  return static_cast<double>(utime + stime) / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+double process_rss_mb(pid_t pid) {
+  return status_field_mb(pid, "VmRSS:");
+}
+double process_hwm_mb(pid_t pid) {
+  return status_field_mb(pid, "VmHWM:");
+}
+
+double thread_cpu_s() {
+  rusage ru{};
+  ::getrusage(RUSAGE_THREAD, &ru);
+  return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec +
+         (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
+}
+
+double load_average_1m() {
+  double l[3] = {0, 0, 0};
+  return ::getloadavg(l, 3) > 0 ? l[0] : -1;
+}
+
+int connect_loopback(int port, double timeout_s) {
+  const int64_t end = monotonic_ns() + static_cast<int64_t>(timeout_s * 1e9);
+  while (monotonic_ns() < end) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
+      int one = 1;
+      ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+      return fd;
+    }
+    ::close(fd);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return -1;
+}
+
+}  // namespace mocap::bench

@@ -1,0 +1,66 @@
+// Shared by the live benchmarks (latency, capacity): simulated WitMotion sensors on real ptys,
+// a spawned mocapd (real drivers, pipeline, JSON server) configured to read them, and /proc
+// readings of the daemon's CPU time and memory.
+#pragma once
+
+#include <sys/types.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "mocap/drivers/sim_encoder.hpp"
+
+namespace mocap::bench {
+
+struct RigOptions {
+  int sensors = 17;
+  double rate_hz = 200;
+  bool publish_every_sample = false;
+  double frame_rate_hz = 120;
+};
+
+/// N ptys with a WitMotion encoder each, and a mocapd reading them.
+class DaemonRig {
+ public:
+  explicit DaemonRig(const RigOptions& o);  ///< spawns mocapd; throws std::runtime_error
+  ~DaemonRig();                             ///< stops mocapd (SIGTERM, then waits)
+  /// Encodes one sample of sensor i (device time t_device_ns) and writes it to its pty.
+  bool write_sample(int i, int64_t t_device_ns);
+  /// Answers host commands on every pty (the driver configures its device at open).
+  void answer_host();
+  int json_port() const { return port_; }
+  pid_t pid() const { return pid_; }
+  /// `status` over the control socket (one JSON line), "" on failure.
+  std::string status() const;
+  /// Waits until every sensor is streaming (status), up to timeout_s.
+  bool wait_streaming(double timeout_s);
+  /// Stops mocapd (SIGTERM) and returns its exit status; idempotent.
+  int stop();
+  const std::string& log_path() const { return log_; }
+
+ private:
+  RigOptions opt_;
+  std::vector<std::unique_ptr<PtyEndpoint>> ptys_;
+  std::vector<std::unique_ptr<ProtocolEncoder>> enc_;
+  std::vector<uint8_t> bytes_, reply_;
+  std::string dir_, ctl_, log_;
+  int port_ = 0;
+  pid_t pid_ = -1;
+  int exit_status_ = -1;
+};
+
+/// CPU seconds (user + system) of a process, from /proc/PID/stat.
+double process_cpu_s(pid_t pid);
+/// VmRSS and VmHWM of a process in MB (from /proc/PID/status); -1 if unreadable.
+double process_rss_mb(pid_t pid);
+double process_hwm_mb(pid_t pid);
+/// CPU seconds of the calling thread.
+double thread_cpu_s();
+/// The 1-minute load average.
+double load_average_1m();
+/// Opens a TCP connection to 127.0.0.1:port, retrying up to timeout_s; -1 on failure.
+int connect_loopback(int port, double timeout_s);
+
+}  // namespace mocap::bench

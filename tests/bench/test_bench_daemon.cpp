@@ -1,0 +1,60 @@
+// `mocap bench latency|capacity|replay` in tiny configurations: they run, exit 0 and print one
+// JSON object whose counts are consistent. No timing is asserted (shared machines).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace {
+
+nlohmann::json run_bench(const std::string& args) {
+  const std::string cmd = std::string(MOCAP_BINARY_DIR) + "/bin/mocap bench " + args;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  EXPECT_NE(p, nullptr);
+  std::string out;
+  char buf[4096];
+  while (size_t n = std::fread(buf, 1, sizeof buf, p))
+    out.append(buf, n);
+  EXPECT_EQ(::pclose(p), 0) << cmd << "\n" << out;
+  return nlohmann::json::parse(out);  // throws (test fails) unless exactly one JSON value
+}
+
+TEST(BenchDaemon, LatencyMatchesEveryWrite) {
+  const auto j = run_bench("latency --sensors 3 --rate 50 --seconds 1");
+  EXPECT_EQ(j.at("benchmark"), "latency");
+  EXPECT_EQ(j.at("written").get<int>(), 150);
+  EXPECT_EQ(j.at("matched").get<int>() + j.at("unmatched").get<int>(), 150);
+  EXPECT_GT(j.at("matched").get<int>(), 0);
+  const auto& l = j.at("latency_ms");
+  EXPECT_GE(l.at("p50").get<double>(), 0.0);
+  EXPECT_LE(l.at("p50").get<double>(), l.at("p99").get<double>());
+  EXPECT_LE(l.at("p99").get<double>(), l.at("max").get<double>());
+  EXPECT_TRUE(j.at("pass").is_boolean());
+}
+
+TEST(BenchDaemon, CapacityCountsSamples) {
+  const auto j = run_bench("capacity --sensors 3 --rate 100 --seconds 1");
+  EXPECT_EQ(j.at("benchmark"), "capacity");
+  const auto& s = j.at("samples");
+  EXPECT_EQ(s.at("written").get<int>(), 300);
+  EXPECT_GE(s.at("received").get<int>() + s.at("lost").get<int>(), 300);
+  EXPECT_GT(s.at("received").get<int>(), 0);
+  EXPECT_GT(j.at("daemon_rss_mb").at("max").get<double>(), 0.0);
+  EXPECT_GE(j.at("daemon_cpu_pct_of_one_core").get<double>(), 0.0);
+}
+
+TEST(BenchDaemon, ReplayReplaysEverySample) {
+  const auto j = run_bench("replay --minutes 0.1");
+  EXPECT_EQ(j.at("benchmark"), "replay");
+  const auto& s = j.at("samples");
+  EXPECT_NEAR(s.at("generated").get<int>(), 17 * 600, 17 * 2);
+  EXPECT_EQ(s.at("baseline_read").get<int>(), s.at("generated").get<int>());
+  EXPECT_EQ(s.at("replayed").get<int>(), s.at("generated").get<int>());
+  EXPECT_GT(j.at("frames").get<int>(), 0);
+  EXPECT_GT(j.at("bvh_mb").get<double>(), 0.0);
+  EXPECT_GT(j.at("ratio_to_baseline").get<double>(), 0.0);
+}
+
+}  // namespace
