@@ -143,8 +143,9 @@ void LineFeeder::run() {
           s->t_us += 10000;
           continue;
         }
-        if (m == FaultMode::truncated)
-          s->pty->write_bytes("123456 0.01 0.02 0.9");  // cut off mid-line; the next ends it
+        // Every other tick a line cut off mid-number: it runs into the next line (both lost).
+        if (m == FaultMode::truncated && (++s->ticks & 1))
+          s->pty->write_bytes("123456 0.01 0.02 0.9");
         const int n = m == FaultMode::flood ? 10 : 1;
         for (int k = 0; k < n; ++k) {
           s->pty->write_sample(s->t_us & s->wrap_mask, phase + 0.005 * k);

@@ -69,6 +69,7 @@ class LineFeeder {
     uint64_t t_us;       ///< device time of the next sample (before wrapping)
     std::atomic<FaultMode> mode{FaultMode::normal};
     std::atomic<uint64_t> written{0};
+    uint64_t ticks = 0;  ///< feeder thread only
   };
   explicit LineFeeder(std::vector<Sensor*> sensors);
   ~LineFeeder();
