@@ -84,8 +84,17 @@ TEST(DeviceFaults, FaultySensorsAreReportedAndTheOthersKeepStreaming) {
   EXPECT_GT(sensor_status(after, "noisy").value("errors", 0ull),
             sensor_status(before, "noisy").value("errors", 0ull))
       << after.dump();
-  for (const char* n : {"good", "noisy", "flood", "wrap"})
-    EXPECT_EQ(sensor_status(after, n).value("state", ""), "streaming") << n << after.dump();
+  // Every sensor streams (a loaded machine may stall a reader thread past the 250 ms stale
+  // time for a moment: allow it to catch up, but a sensor lost for good fails).
+  const bool all_streaming = wait_until(
+      [&] {
+        const auto st = d.status();
+        for (const char* n : {"good", "noisy", "flood", "wrap"})
+          if (sensor_status(st, n).value("state", "") != "streaming") return false;
+        return true;
+      },
+      10s);
+  EXPECT_TRUE(all_streaming) << d.status().dump() << "\n" << d.log_text();
   EXPECT_GT(after.value("frame", 0ull), before.value("frame", 0ull) + 100);
   EXPECT_GT(samples_of(after), samples_of(before) + good_written);
   // The clock jumps are reported (a 16-bit rollover is not a jump: wrap stays at 0).
