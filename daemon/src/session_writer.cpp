@@ -169,12 +169,13 @@ void SessionWriter::run() {
       if (!err && len > first) err = write_all(fd_, ring_.get(), len - first, w2);
       const char* what = "cannot write session file";
       if (!err && (err = sync_fd(fd_)) != 0) what = "cannot sync session file";
-      lock.lock();
+      // On an error, keep the whole blocks that did reach the file and cut the torn one off
+      // (without the lock: the ring region [tail, head) belongs to this thread until tail_ moves).
+      std::size_t whole = 0;
+      uint64_t whole_blocks = 0;
+      bool cut_ok = false;
       if (err) {
-        // Keep the whole blocks that did reach the file; cut the torn one off.
         const std::size_t reached = w1 + w2;
-        std::size_t whole = 0;
-        uint64_t whole_blocks = 0;
         while (whole + session::kBlockHeaderBytes <= reached) {
           uint8_t hdr[session::kBlockHeaderBytes];
           for (std::size_t i = 0; i < sizeof hdr; ++i)
@@ -185,8 +186,12 @@ void SessionWriter::run() {
           whole += block;
           ++whole_blocks;
         }
-        if (::ftruncate(fd_, static_cast<off_t>(bytes_durable_ + whole)) == 0 &&
-            sync_fd(fd_) == 0) {
+        cut_ok =
+            ::ftruncate(fd_, static_cast<off_t>(bytes_durable_ + whole)) == 0 && sync_fd(fd_) == 0;
+      }
+      lock.lock();
+      if (err) {
+        if (cut_ok) {
           bytes_durable_ += whole;
           blocks_durable_ += whole_blocks;
         }

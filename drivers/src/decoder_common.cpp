@@ -1,6 +1,7 @@
 // Shared decoder tail: time mapping, axis remap, NaN guard (see decoder_common.hpp).
 #include "decoder_common.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <stdexcept>
@@ -54,6 +55,9 @@ void DecoderCommon::finish(ImuSample& s, SampleSink& sink) {
     s.mag_uT = remap_.apply(s.mag_uT);
     if (s.has(kFieldQuat)) s.q_device_sensor = remap_.apply(s.q_device_sensor);
   }
+  // Host time never runs backwards for one sensor (clock resets, timed/untimed mixes).
+  s.t_host_ns = std::max(s.t_host_ns, last_host_ns_);
+  last_host_ns_ = s.t_host_ns;
   s.sensor_id = sensor_id;
   s.seq = seq_++;
   ++stats.samples;

@@ -37,6 +37,7 @@ class DecoderCommon {
   DeviceClock clock_;
   uint32_t seq_ = 0;
   int64_t first_read_ns_ = -1;
+  int64_t last_host_ns_ = INT64_MIN;
 };
 
 /// Reads a numeric option from spec.options (fallback when absent); throws invalid_argument

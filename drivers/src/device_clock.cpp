@@ -2,6 +2,7 @@
 #include "mocap/drivers/device_clock.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 namespace mocap {
@@ -19,12 +20,12 @@ int64_t Unwrapper::next(uint64_t raw) {
     last_raw_ = raw;
   } else {
     raw %= modulus_;
-    uint64_t fwd = (raw + modulus_ - last_raw_) % modulus_;
-    step_ = fwd > modulus_ / 2 ? static_cast<int64_t>(fwd) - static_cast<int64_t>(modulus_)
-                               : static_cast<int64_t>(fwd);
+    // (raw - last) mod modulus without overflow (modulus may be up to 2^63).
+    const uint64_t fwd = raw >= last_raw_ ? raw - last_raw_ : modulus_ - (last_raw_ - raw);
+    step_ = fwd > modulus_ / 2 ? -static_cast<int64_t>(modulus_ - fwd) : static_cast<int64_t>(fwd);
     last_raw_ = raw;
   }
-  value_ += step_;
+  value_ = static_cast<int64_t>(static_cast<uint64_t>(value_) + static_cast<uint64_t>(step_));
   return value_;
 }
 
@@ -47,7 +48,6 @@ void DeviceClock::restart(int64_t t_device_ns, int64_t offset_ns) {
   win_min_device_ = t_device_ns;
   n_points_ = next_point_ = 0;
   intercept_ = slope_ = 0;
-  last_out_ns_ = INT64_MIN;
 }
 
 void DeviceClock::refit() {
@@ -76,8 +76,13 @@ void DeviceClock::refit() {
 int64_t DeviceClock::map(int64_t t_device_ns, int64_t t_read_ns, bool& reset) {
   reset = false;
   if (started_) {
-    const int64_t dd = t_device_ns - last_device_ns_, dh = t_read_ns - last_read_ns_;
-    if (dd < -1'000'000 || std::llabs(dd - dh) > p_.jump_ns) {
+    // Differences in unsigned arithmetic: adversarial device times must not overflow.
+    const auto diff = [](int64_t a, int64_t b) {
+      return static_cast<int64_t>(static_cast<uint64_t>(a) - static_cast<uint64_t>(b));
+    };
+    const int64_t dd = diff(t_device_ns, last_device_ns_), dh = diff(t_read_ns, last_read_ns_);
+    const int64_t mismatch = diff(dd, dh);
+    if (dd < -1'000'000 || mismatch > p_.jump_ns || mismatch < -p_.jump_ns) {
       reset = true;
       ++resets_;
       started_ = false;
@@ -118,16 +123,17 @@ int64_t PeriodTracker::update(int64_t step_ns) {
   if (step_ns <= 0) return 0;
   if (period_ns_ == 0) {
     // Two similar consecutive steps establish the period.
-    if (candidate_ns_ > 0 && std::llabs(step_ns - candidate_ns_) * 4 < candidate_ns_)
-      period_ns_ = (step_ns + candidate_ns_) / 2;
+    if (candidate_ns_ > 0 && std::fabs(static_cast<double>(step_ns) / candidate_ns_ - 1.0) < 0.25)
+      period_ns_ = candidate_ns_ / 2 + step_ns / 2;
     candidate_ns_ = step_ns;
     return 0;
   }
-  if (step_ns * 2 < period_ns_ * 3) {
-    if (step_ns * 2 > period_ns_) period_ns_ += (step_ns - period_ns_) / 16;  // slow tracking
+  const double ratio = static_cast<double>(step_ns) / static_cast<double>(period_ns_);
+  if (ratio < 1.5) {
+    if (ratio > 0.5) period_ns_ += (step_ns - period_ns_) / 16;  // slow tracking
     return 0;
   }
-  return (step_ns + period_ns_ / 2) / period_ns_ - 1;
+  return ratio > 1e12 ? int64_t{1'000'000'000'000} : std::llround(ratio) - 1;
 }
 
 }  // namespace mocap

@@ -44,6 +44,11 @@ class HidTransport final : public ByteTransport {
     if (n < 0) err = name_ + ": feature report: " + narrow(hid_error(dev_));
     return n;
   }
+  bool set_feature(std::span<const uint8_t> bytes, std::string& err) override {
+    if (hid_send_feature_report(dev_, bytes.data(), bytes.size()) >= 0) return true;
+    err = name_ + ": set feature report: " + narrow(hid_error(dev_));
+    return false;
+  }
   bool record_framed() const override { return true; }
   std::string describe() const override { return "hid " + name_; }
 

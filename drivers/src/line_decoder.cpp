@@ -1,5 +1,6 @@
 // Decoder for the DIY line protocol: declared units -> SI, unwrapped device time -> host time,
 // drops inferred from gaps in the device time.
+#include <cmath>
 #include <stdexcept>
 
 #include "decoder_common.hpp"
@@ -48,7 +49,12 @@ class LineDecoder final : public ProtocolDecoder {
       return;
     }
     const int64_t ticks = unwrap_.next(static_cast<uint64_t>(rec_.t));
-    const int64_t t_device_ns = static_cast<int64_t>(static_cast<double>(ticks) * units_.t_to_ns);
+    const double t_ns = static_cast<double>(ticks) * units_.t_to_ns;
+    if (!(std::fabs(t_ns) < 4e18)) {  // beyond any real clock (and int64): not a sample
+      ++bad_headers_;
+      return;
+    }
+    const int64_t t_device_ns = static_cast<int64_t>(t_ns);
     const int64_t dropped = period_.update(t_device_ns - last_device_ns_);
     last_device_ns_ = t_device_ns;
     ImuSample s;

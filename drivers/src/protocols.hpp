@@ -13,8 +13,9 @@ namespace mocap {
 
 /// One host action after the transport opens (configuration, calibration read).
 struct SetupStep {
-  enum Kind { kWrite, kGetFeature, kPause } kind = kWrite;
+  enum Kind { kWrite, kGetFeature, kSetBaud, kPause } kind = kWrite;
   std::vector<uint8_t> bytes;  ///< kWrite: bytes to send; kGetFeature: {report id} and size
+  int baud = 0;                ///< kSetBaud: the host side follows the device to this baud
   std::size_t feature_size = 0;
   int64_t reply_id = -1;  ///< wait until the decoder counts a reply with this id
   int timeout_ms = 250;   ///< reply wait (or pause length)

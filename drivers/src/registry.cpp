@@ -2,6 +2,7 @@
 #include <stdexcept>
 
 #include "mocap/drivers/device.hpp"
+#include "mocap/drivers/sim_transport.hpp"
 #include "protocols.hpp"
 #include "stream_device.hpp"
 
@@ -11,12 +12,10 @@ namespace {
 const ProtocolInfo kProtocols[] = {
     {"line", ProtocolInfo::kSerial, 115200, 1, make_line_decoder, nullptr},
     {"witmotion", ProtocolInfo::kSerial, 9600, 1, make_witmotion_decoder, witmotion_setup},
-#ifdef MOCAP_DRIVERS_ALL
     {"xbus", ProtocolInfo::kSerial, 115200, 2, make_xbus_decoder, xbus_setup},
     {"ds4", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
     {"dualsense", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
     {"joycon", ProtocolInfo::kHid, 0, 1, make_joycon_decoder, joycon_setup},
-#endif
 };
 }  // namespace
 
@@ -92,6 +91,19 @@ std::unique_ptr<Device> make_device(const DeviceSpec& spec, Logger log) {
   std::vector<SetupStep> setup = info.setup ? info.setup(spec) : std::vector<SetupStep>{};
   return std::make_unique<StreamDevice>(spec, std::move(log), std::move(opener), std::move(decoder),
                                         std::move(setup));
+}
+
+}  // namespace mocap
+
+namespace mocap {
+
+std::unique_ptr<Device> make_device_with_transport(
+    const DeviceSpec& spec, Logger log,
+    std::function<std::unique_ptr<ByteTransport>(std::string& err)> open) {
+  const ProtocolInfo& info = require_protocol(spec);
+  std::vector<SetupStep> setup = info.setup ? info.setup(spec) : std::vector<SetupStep>{};
+  return std::make_unique<StreamDevice>(spec, std::move(log), std::move(open),
+                                        info.make_decoder(spec), std::move(setup));
 }
 
 }  // namespace mocap

@@ -75,6 +75,14 @@ void SimulatedDevice::run() {
         for (int i = 0; i < 7; ++i)
           out.push_back(static_cast<uint8_t>((lcg = lcg * 1103515245 + 12345) >> 16));
       }
+      if (udp_ && k % 250 == 1) {  // one-way link: repeat the calibration now and then
+        std::vector<uint8_t> cal;
+        enc_->unsolicited(cal);
+        if (!cal.empty()) {
+          std::lock_guard lk(mu_);
+          udp_->send(cal);  // one report (feature report sizes differ from input reports)
+        }
+      }
       const std::size_t start = out.size();
       enc_->encode(motion_->at(t_device_ns), out);
       if (drop) {

@@ -12,12 +12,10 @@ std::unique_ptr<ProtocolEncoder> make_encoder(std::string_view protocol,
     throw std::invalid_argument("simulated device: rate must be in (0, 10000] Hz");
   if (protocol == "line") return make_line_encoder(opt);
   if (protocol == "witmotion") return make_witmotion_encoder(opt);
-#ifdef MOCAP_DRIVERS_ALL
   if (protocol == "xbus") return make_xbus_encoder(opt);
   if (protocol == "ds4") return make_playstation_encoder(opt, false);
   if (protocol == "dualsense") return make_playstation_encoder(opt, true);
   if (protocol == "joycon") return make_joycon_encoder(opt);
-#endif
   throw std::invalid_argument("simulated device: unknown protocol \"" + std::string(protocol) +
                               "\" (known: witmotion, xbus, ds4, dualsense, joycon, line)");
 }

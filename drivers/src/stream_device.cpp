@@ -68,6 +68,7 @@ bool StreamDevice::try_open(SampleSink& sink) {
   last_data_ns_ = monotonic_ns();
   sink.on_connection(spec_.device_index, true, "opened " + transport_->describe());
   step_ = 0;
+  attempts_ = 0;
   if (!setup_.empty()) begin_step(sink);
   return true;
 }
@@ -97,6 +98,9 @@ void StreamDevice::begin_step(SampleSink& sink) {
   std::string err;
   if (s.kind == SetupStep::kWrite) {
     if (!transport_->write(s.bytes, err))
+      log_.warn("%s: %s: %s", spec_.name.c_str(), s.what, err.c_str());
+  } else if (s.kind == SetupStep::kSetBaud) {
+    if (!transport_->set_baud(s.baud, err))
       log_.warn("%s: %s: %s", spec_.name.c_str(), s.what, err.c_str());
   } else if (s.kind == SetupStep::kGetFeature) {
     std::array<uint8_t, 256> buf{};

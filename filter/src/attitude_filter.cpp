@@ -2,6 +2,7 @@
 // filter, rest detection and magnetic-disturbance handling. Equations in docs/filter.md.
 #include "mocap/filter/attitude_filter.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -52,11 +53,14 @@ void AttitudeFilter::refresh_coeffs() {
   c_.mag_ts_s = st_.mag_ts_nom_s > 0 ? st_.mag_ts_nom_s : c_.acc_ts_s;
 
   c_.acc_lp = filt::butterworth(p_.tau_acc_s, c_.acc_ts_s);
+  c_.acc_fast_lp = filt::butterworth(p_.tau_acc_fast_s, c_.acc_ts_s);
+  c_.k_acc_dyn = filt::gain_from_tau(p_.acc_dyn_tau_s, c_.acc_ts_s);
   c_.rest_gyr_lp = filt::butterworth(p_.rest_filter_tau_s, c_.gyr_ts_s);
   c_.rest_acc_lp = filt::butterworth(p_.rest_filter_tau_s, c_.acc_ts_s);
   c_.mag_norm_dip_lp = filt::butterworth(p_.mag_current_tau_s, c_.mag_ts_s);
   c_.k_mag = filt::gain_from_tau(p_.tau_mag_s, c_.mag_ts_s);
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
+  c_.k_hard_iron = p_.hard_iron_tau_s > 0 ? std::exp(-c_.mag_ts_s / p_.hard_iron_tau_s) : 0.0;
   c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
 
   // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
@@ -106,9 +110,11 @@ bool AttitudeFilter::stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double
   else
     ++cnt_.gaps;
   // Re-derive coefficients when a tracked period moved more than 2 % from the one in use.
-  if (std::abs(st_.gyr_ts_nom_s - c_.gyr_ts_s) > 0.02 * c_.gyr_ts_s ||
-      std::abs(st_.acc_ts_nom_s - c_.acc_ts_s) > 0.02 * c_.acc_ts_s ||
-      std::abs(st_.mag_ts_nom_s - c_.mag_ts_s) > 0.02 * c_.mag_ts_s)
+  auto moved = [](double nom, double used) {
+    return nom > 0 && std::abs(nom - used) > 0.02 * used;
+  };
+  if (moved(st_.gyr_ts_nom_s, c_.gyr_ts_s) || moved(st_.acc_ts_nom_s, c_.acc_ts_s) ||
+      moved(st_.mag_ts_nom_s, c_.mag_ts_s))
     refresh_coeffs();
   return true;
 }
@@ -187,7 +193,18 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   // Acc into the almost-inertial frame, low-pass, then into the 6D earth frame.
   const Eigen::Vector3d acc_i = st_.q_gyr * acc;
   const auto& f = st_.acc_lp.step(acc_i.data(), c_.acc_lp, p_.tau_acc_s, ts);
-  Eigen::Vector3d acc_e = st_.q_acc * Eigen::Vector3d(f[0], f[1], f[2]);
+  Eigen::Vector3d acc_f(f[0], f[1], f[2]);
+  if (p_.tau_acc_fast_s > 0) {
+    // Linear-acceleration intensity: deviation of the specific force from the gravity estimate.
+    st_.acc_dyn_m2_s4 += c_.k_acc_dyn * ((acc_i - acc_f).squaredNorm() - st_.acc_dyn_m2_s4);
+    const auto& ff = st_.acc_fast_lp.step(acc_i.data(), c_.acc_fast_lp, p_.tau_acc_fast_s, ts);
+    st_.gyr_dyn_rad2_s2 += c_.k_acc_dyn * (st_.last_gyr_rad_s.squaredNorm() - st_.gyr_dyn_rad2_s2);
+    const double rho2 = (st_.gyr_dyn_rad2_s2 + 1e-4) / (st_.acc_dyn_m2_s4 + 1e-2);
+    const double ref2 = p_.acc_dyn_ref_rad_s_per_m_s2 * p_.acc_dyn_ref_rad_s_per_m_s2;
+    const double alpha = rho2 / (rho2 + ref2);
+    acc_f = (1.0 - alpha) * acc_f + alpha * Eigen::Vector3d(ff[0], ff[1], ff[2]);
+  }
+  Eigen::Vector3d acc_e = st_.q_acc * acc_f;
   const double an = acc_e.norm();
   if (!(an > 1e-9)) return;
   acc_e /= an;
@@ -262,8 +279,41 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   st_.bias_p -= k * cm * st_.bias_p;
 }
 
-void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
+// Exponentially weighted least squares for (c, h) in R m = c + R h, R = rotation of q_gyr.
+// With W = sum w, S = sum w R, u = sum w R m, v = sum w m the normal equations reduce to
+// (W^2 I - S^T S) h = W v - S^T u.
+void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag) {
+  const double f = c_.k_hard_iron;
+  const Eigen::Matrix3d r = st_.q_gyr.toRotationMatrix();
+  st_.hi_w = f * st_.hi_w + 1.0;
+  st_.hi_s = f * st_.hi_s + r;
+  st_.hi_u = f * st_.hi_u + r * mag;
+  st_.hi_v = f * st_.hi_v + mag;
+  st_.hi_e = f * st_.hi_e + mag.squaredNorm();
+  if (++st_.hi_n < 16) return;  // solve at about 1/16 of the magnetometer rate
+  st_.hi_n = 0;
+  const double w = st_.hi_w;
+  const Eigen::Matrix3d m = w * w * Eigen::Matrix3d::Identity() - st_.hi_s.transpose() * st_.hi_s;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(m, Eigen::EigenvaluesOnly);
+  const double excitation = es.eigenvalues()(0) / (w * w);
+  if (!(excitation > p_.hard_iron_min_excitation)) return;  // keep the last estimate
+  const Eigen::Vector3d h = m.ldlt().solve(w * st_.hi_v - st_.hi_s.transpose() * st_.hi_u);
+  const Eigen::Vector3d c = (st_.hi_u - st_.hi_s * h) / w;
+  const double res = st_.hi_e + w * c.squaredNorm() + w * h.squaredNorm() - 2 * c.dot(st_.hi_u) -
+                     2 * h.dot(st_.hi_v) + 2 * c.dot(st_.hi_s * h);
+  const double rms_rel = std::sqrt(std::max(res, 0.0) / w) / std::max(c.norm(), 1e-9);
+  if (h.allFinite() && rms_rel < p_.hard_iron_max_residual) {
+    st_.hard_iron_uT = h;
+    st_.hard_iron_valid = true;
+  }
+}
+
+void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const double ts = c_.mag_ts_s;
+  if (p_.hard_iron_tau_s > 0) update_hard_iron(mag_raw);
+  const Eigen::Vector3d mag =
+      st_.hard_iron_valid ? Eigen::Vector3d(mag_raw - st_.hard_iron_uT) : mag_raw;
   const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
   const Eigen::Vector3d m_e = q6 * mag;
 
@@ -292,7 +342,8 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
         std::abs(dip - st_.mag_cand_dip) < dip_th) {
       // A new field replacing a known one must be seen while rotating (a static local
       // disturbance stays self-consistent at rest); the very first field needs no rotation.
-      if (st_.mag_ref_norm == 0 || st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kDeg)
+      if ((st_.mag_ref_norm == 0 && !p_.mag_first_needs_rotation) ||
+          st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kDeg)
         st_.mag_cand_t_s += ts;
       st_.mag_cand_norm += c_.k_mag_ref * (norm - st_.mag_cand_norm);
       st_.mag_cand_dip += c_.k_mag_ref * (dip - st_.mag_cand_dip);
@@ -312,17 +363,18 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag, double dt_s) {
   }
 
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
-  if (p_.mag_dist_rejection && p_.mag_consistency_th_deg > 0) {
-    // Gyro-consistency: wobble of the measured heading around its short-term mean.
-    if (!st_.mag_err_init) {
-      st_.mag_err_mean_rad = err;
-      st_.mag_err_init = true;
+  if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
+    // Gyro-consistency: the field in the almost-inertial frame must stay put.
+    const Eigen::Vector3d m_i = st_.q_gyr * mag;
+    if (!st_.mag_i_init) {
+      st_.mag_i_mean = m_i;
+      st_.mag_i_init = true;
     }
-    const double dev = wrap_pi(err - st_.mag_err_mean_rad);
-    st_.mag_err_mean_rad = wrap_pi(st_.mag_err_mean_rad + c_.k_mag_consistency * dev);
-    st_.mag_err_var_rad2 += c_.k_mag_consistency * (dev * dev - st_.mag_err_var_rad2);
-    const double th = p_.mag_consistency_th_deg * kDeg;
-    if (st_.mag_err_var_rad2 > th * th) {
+    const Eigen::Vector3d dev = m_i - st_.mag_i_mean;
+    st_.mag_i_mean += c_.k_mag_consistency * dev;
+    st_.mag_i_var_rel +=
+        c_.k_mag_consistency * (dev.squaredNorm() / m_i.squaredNorm() - st_.mag_i_var_rel);
+    if (st_.mag_i_var_rel > p_.mag_consistency_th * p_.mag_consistency_th) {
       st_.mag_disturbed = true;
       st_.mag_undisturbed_t_s = 0;
     }

@@ -57,35 +57,50 @@ MotionTrack::MotionTrack(std::shared_ptr<const Motion> motion, const BodyDimensi
   loop_shift_m_.z() = 0;
 }
 
-void MotionTrack::planted_root(const BodyPose& o, double& z_m, Eigen::Vector3d& rel_l,
-                               Eigen::Vector3d& rel_r, double& w_r) const {
-  // Ankle positions relative to the pelvis origin, earth axes (leg chains only).
-  auto ankle = [&](Segment thigh, Segment shank, Segment foot) {
+void MotionTrack::contacts(const BodyPose& o, Contacts& c) const {
+  // Heel (below the ankle, on the floor in the N-pose) and toe (the foot's end point) of each
+  // foot relative to the pelvis origin, earth axes (leg chains only).
+  auto foot_points = [&](Segment thigh, Segment shank, Segment foot, Eigen::Vector3d* out) {
     const Eigen::Quaterniond q_thigh = o.q_earth_pelvis * o.q_parent_segment[index(thigh)];
     const Eigen::Quaterniond q_shank = q_thigh * o.q_parent_segment[index(shank)];
-    return Eigen::Vector3d(o.q_earth_pelvis * dims_.joint_offset_m[index(thigh)] +
-                           q_thigh * dims_.joint_offset_m[index(shank)] +
-                           q_shank * dims_.joint_offset_m[index(foot)]);
+    const Eigen::Quaterniond q_foot = q_shank * o.q_parent_segment[index(foot)];
+    const Eigen::Vector3d ankle = o.q_earth_pelvis * dims_.joint_offset_m[index(thigh)] +
+                                  q_thigh * dims_.joint_offset_m[index(shank)] +
+                                  q_shank * dims_.joint_offset_m[index(foot)];
+    out[0] = ankle + q_foot * Eigen::Vector3d(0, 0, -ankle_height_m_);
+    out[1] = ankle + q_foot * dims_.end_offset_m[index(foot)];
   };
-  rel_l = ankle(Segment::thigh_l, Segment::shank_l, Segment::foot_l);
-  rel_r = ankle(Segment::thigh_r, Segment::shank_r, Segment::foot_r);
-  // Right foot bears the weight when the left ankle is higher.
-  w_r = o.weight_right >= 0 ? std::min(o.weight_right, 1.0)
-                            : smooth((rel_l.z() - rel_r.z() + kBlendHeightM) / (2 * kBlendHeightM));
-  z_m = ankle_height_m_ - ((1 - w_r) * rel_l.z() + w_r * rel_r.z());
+  foot_points(Segment::thigh_l, Segment::shank_l, Segment::foot_l, &c.p[0]);
+  foot_points(Segment::thigh_r, Segment::shank_r, Segment::foot_r, &c.p[2]);
+  // Within a foot the lower of heel and toe carries it; between feet the lower foot. Both
+  // blended over kBlendHeightM of height difference (C2).
+  auto blend = [](double z_a, double z_b) {  // weight of b
+    return smooth((z_a - z_b + kBlendHeightM) / (2 * kBlendHeightM));
+  };
+  const double toe_l = blend(c.p[0].z(), c.p[1].z()), toe_r = blend(c.p[2].z(), c.p[3].z());
+  const double z_l = (1 - toe_l) * c.p[0].z() + toe_l * c.p[1].z();
+  const double z_r = (1 - toe_r) * c.p[2].z() + toe_r * c.p[3].z();
+  const double w_r = blend(z_l, z_r);
+  c.w[0] = (1 - w_r) * (1 - toe_l);
+  c.w[1] = (1 - w_r) * toe_l;
+  c.w[2] = w_r * (1 - toe_r);
+  c.w[3] = w_r * toe_r;
+  c.z_m = -((1 - w_r) * z_l + w_r * z_r);  // floor at z = 0
 }
 
 Eigen::Vector3d MotionTrack::root_velocity(double t_s) const {
+  // Minus the weighted velocity of the contact points relative to the pelvis: velocities are
+  // blended, not positions, so rolling from heel to toe does not drag the foot along its sole.
   const double h = 1e-5;
   BodyPose a, b;
   motion_->pose(t_s - h, a);
   motion_->pose(t_s + h, b);
-  double z, w_a, w_b;
-  Eigen::Vector3d la, ra, lb, rb;
-  planted_root(a, z, la, ra, w_a);
-  planted_root(b, z, lb, rb, w_b);
-  const double w_r = 0.5 * (w_a + w_b);
-  Eigen::Vector3d v = -((1 - w_r) * (lb - la) + w_r * (rb - ra)) / (2 * h);
+  Contacts ca, cb;
+  contacts(a, ca);
+  contacts(b, cb);
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 4; ++i)
+    v -= 0.5 * (ca.w[i] + cb.w[i]) * (cb.p[i] - ca.p[i]) / (2 * h);
   v.z() = 0;
   return v;
 }
@@ -94,9 +109,8 @@ void MotionTrack::local_pose(double t_s, BodyPose& out) const {
   t_s = std::clamp(t_s, 0.0, period_s());
   motion_->pose(t_s, out);
   if (motion_->has_root_translation()) return;
-  double z, w_r;
-  Eigen::Vector3d rel_l, rel_r;
-  planted_root(out, z, rel_l, rel_r, w_r);
+  Contacts c;
+  contacts(out, c);
   const double x = t_s / grid_s_;
   const int k = std::min(static_cast<int>(x), static_cast<int>(root_xy_.size()) - 2);
   const double dt = t_s - k * grid_s_;
@@ -107,7 +121,7 @@ void MotionTrack::local_pose(double t_s, BodyPose& out) const {
       step += kGaussWeight[g] * root_velocity(k * grid_s_ + kGaussNode[g] * dt);
     p += step * dt;
   }
-  p.z() = z;
+  p.z() = c.z_m;
   out.p_earth_pelvis_m = p;
 }
 

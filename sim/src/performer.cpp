@@ -40,7 +40,8 @@ Performer::Performer(const PerformerParams& params) : Performer(params, motion_f
 
 Performer::Performer(const PerformerParams& params, std::shared_ptr<const Motion> motion)
     : params_(params),
-      dims_(body_dimensions_from_height(params.height_m)),
+      dims_(motion && motion->dimensions() ? *motion->dimensions()
+                                           : body_dimensions_from_height(params.height_m)),
       track_(std::move(motion), dims_, params.loop) {
   if (!(params_.rate_hz > 0)) throw std::invalid_argument("performer rate_hz must be > 0");
   std::mt19937_64 mount_rng(params_.seed * 0x9E3779B97F4A7C15ull + 17);

@@ -51,7 +51,9 @@ void set(BodyPose& p, Segment s, const Quaterniond& q) {
   p.q_parent_segment[index(s)] = q;
 }
 
-/// One leg of a walk/step: hip flexion, knee flexion; the ankle keeps the foot level.
+/// One leg: hip flexion, knee flexion; the ankle sets the foot's earth pitch to
+/// `pelvis_pitch_deg` minus that value, i.e. level when the pelvis pitch is passed, toe down by t
+/// when -t is passed with a level pelvis.
 void leg(BodyPose& p, bool left, double hip_deg, double knee_deg, double pelvis_pitch_deg) {
   const Segment thigh = left ? Segment::thigh_l : Segment::thigh_r;
   const Segment shank = left ? Segment::shank_l : Segment::shank_r;
@@ -74,16 +76,18 @@ void walk(double t, double d, BodyPose& p) {
   const double a = envelope(t, d, 1.0);
   const double phase_l = t / cycle_s, phase_r = phase_l + 0.5;
   const double c_l = std::cos(2 * std::numbers::pi * phase_l);
-  auto knee = [&](double phase) {
+  // Own phase 0: heel strike with the hip flexed 20 deg; stance while the hip extends to -20
+  // (phase 0.5); the heel rises from 0.3 (the foot rolls onto the toe, up to 30 deg at toe-off)
+  // and the knee flexes up to 60 deg in swing.
+  auto leg_at = [&](bool left, double phase) {
     const double u = frac(phase);
-    return a * (60 * bump((u - 0.5) / 0.5) + 10 * bump((u - 0.05) / 0.3));
+    const double hip = a * 20 * std::cos(2 * std::numbers::pi * phase);
+    const double knee = a * 60 * bump((u - 0.45) / 0.55);
+    const double toe_down = a * 30 * bump((u - 0.3) / 0.5);
+    leg(p, left, hip, knee, -toe_down);
   };
-  // Left stance while the left hip extends (phase 0..0.5), right stance for 0.5..1, with 10%
-  // double support around each heel strike.
-  auto rise = [](double x) { return smooth((x - 0.45) / 0.1) - smooth((x - 0.95) / 0.1); };
-  p.weight_right = rise(frac(phase_l)) + rise(frac(phase_l) + 1);
-  leg(p, true, a * 20 * c_l, knee(phase_l), 0);
-  leg(p, false, a * 20 * std::cos(2 * std::numbers::pi * phase_r), knee(phase_r), 0);
+  leg_at(true, phase_l);
+  leg_at(false, phase_r);
   p.q_earth_pelvis = rz(-4 * a * c_l);
   set(p, Segment::torso, rz(4 * a * c_l) * ry(3 * a));
   set(p, Segment::neck, ry(-3 * a));

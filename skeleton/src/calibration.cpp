@@ -241,7 +241,8 @@ CalibrationResult Calibrator::finish() {
 }
 
 void apply_heading_reset(Calibration& c, const std::array<Eigen::Quaterniond, kSegmentCount>& q_es,
-                         const std::array<bool, kSegmentCount>& have) {
+                         const std::array<bool, kSegmentCount>& have,
+                         const double* target_heading_rad) {
   std::array<double, kSegmentCount> yaw{};
   double sx = 0, sy = 0;
   for (int i = 0; i < kSegmentCount; ++i) {
@@ -250,8 +251,10 @@ void apply_heading_reset(Calibration& c, const std::array<Eigen::Quaterniond, kS
     sx += std::cos(yaw[i]);
     sy += std::sin(yaw[i]);
   }
-  if (!have[0] && std::hypot(sx, sy) < 1e-9) return;
-  const double ref = have[0] ? yaw[0] : std::atan2(sy, sx);
+  if (!target_heading_rad && !have[0] && std::hypot(sx, sy) < 1e-9) return;
+  const double ref = target_heading_rad ? *target_heading_rad
+                     : have[0]          ? yaw[0]
+                                        : std::atan2(sy, sx);
   for (int i = 0; i < kSegmentCount; ++i) {
     if (!have[i]) continue;
     c.q_correction[i] = (yaw_rotation(ref - yaw[i]) * c.q_correction[i]).normalized();

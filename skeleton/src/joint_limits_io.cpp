@@ -44,6 +44,9 @@ void read_range(std::string_view source, const toml::node& n, std::string_view k
 }  // namespace
 
 JointLimits parse_joint_limits(std::string_view text, std::string_view source) {
+  // TOML forbids raw NUL; toml++ 3.3 asserts on some NUL placements, so refuse them first.
+  if (const size_t nul = text.find('\0'); nul != std::string_view::npos)
+    throw std::runtime_error(std::string(source) + ": NUL byte at offset " + std::to_string(nul));
   toml::table tbl;
   try {
     tbl = toml::parse(text, source);

@@ -7,7 +7,7 @@ RootMotion::RootMotion(const BodyModel& model, RootMotionOptions options)
     : opt_(options), pelvis_height_m_(model.pelvis_height_m()) {
   const Eigen::Vector3d end = model.end_offset_m(index(Segment::foot_l));
   heel_local_ = Eigen::Vector3d(0, 0, end.z());
-  toe_local_ = end;
+  toe_local_ = options.ankle_contact ? heel_local_ : end;
   reset();
 }
 

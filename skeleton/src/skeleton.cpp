@@ -50,11 +50,20 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
   if (t_ns > t_newest_ns_) t_newest_ns_ = t_ns;
 }
 
-void Skeleton::reset_heading() {
+void Skeleton::reset_heading(const double* target_heading_deg) {
   std::array<bool, kSegmentCount> have{};
   for (int i = 0; i < kSegmentCount; ++i)
-    have[i] = have_[i] && rig_.tracked(i);
-  apply_heading_reset(calib_, q_es_, have);
+    have[i] = have_[i] && !dead_[i] && rig_.tracked(i);
+  if (target_heading_deg) {
+    const double rad = *target_heading_deg * kDegToRad;
+    apply_heading_reset(calib_, q_es_, have, &rad);
+  } else {
+    apply_heading_reset(calib_, q_es_, have);
+  }
+}
+
+void Skeleton::set_sensor_live(int segment, bool live) {
+  if (segment >= 0 && segment < kSegmentCount) dead_[segment] = !live;
 }
 
 double Skeleton::drift_signal_deg() const {
@@ -62,15 +71,19 @@ double Skeleton::drift_signal_deg() const {
 }
 
 void Skeleton::solve(PoseFrame& out) {
+  solve(t_newest_ns_, out);
+}
+
+void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
   std::array<uint32_t, kSegmentCount> flags{};
   std::array<bool, kSegmentCount> live{};
   // 1. Segments with a sensor that has reported.
   for (int i = 0; i < kSegmentCount; ++i) {
-    if (!rig_.tracked(i) || !have_[i]) continue;
+    if (!rig_.tracked(i) || !have_[i] || dead_[i]) continue;
     live[i] = true;
     q_earth_[i] = calib_.segment_from_sensor(i, q_es_[i]);
     flags[i] = kSegTracked | in_flags_[i];
-    if (t_newest_ns_ - t_in_ns_[i] > opt_.stale_after_ns) flags[i] |= kSegStale;
+    if (t_now_ns - t_in_ns_[i] > opt_.stale_after_ns) flags[i] |= kSegStale;
   }
   // 2. Segments without (live) sensor, in depth-first order: slerp from the parent towards the
   //    tracked segment further down the chain, or copy the parent.
@@ -90,8 +103,7 @@ void Skeleton::solve(PoseFrame& out) {
   }
   // 3. Joint rotations and limits (parents first, so clamping propagates).
   const double dt_s =
-      frame_ == 0 ? 0.0
-                  : std::max(0.0, static_cast<double>(t_newest_ns_ - t_prev_solve_ns_) * 1e-9);
+      frame_ == 0 ? 0.0 : std::max(0.0, static_cast<double>(t_now_ns - t_prev_solve_ns_) * 1e-9);
   const double alpha =
       opt_.violation_tau_s > 0 ? 1.0 - std::exp(-dt_s / opt_.violation_tau_s) : 1.0;
   for (int i = 0; i < kSegmentCount; ++i) {
@@ -130,8 +142,8 @@ void Skeleton::solve(PoseFrame& out) {
 
   // 6. Publish.
   out.frame = frame_++;
-  out.t_ns = t_newest_ns_;
-  t_prev_solve_ns_ = t_newest_ns_;
+  out.t_ns = t_now_ns;
+  t_prev_solve_ns_ = t_now_ns;
   out.flags =
       calib_.valid ? (out.flags | kFrameCalibrated) : (out.flags & ~uint32_t{kFrameCalibrated});
   for (int i = 0; i < kSegmentCount; ++i) {

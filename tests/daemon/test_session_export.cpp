@@ -3,10 +3,14 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <Eigen/Geometry>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
+#include "mocap/skeleton/body_model.hpp"
+#include "mocap/skeleton/bvh.hpp"
 #include "session_test_util.hpp"
 
 using namespace mocap;
@@ -99,4 +103,63 @@ TEST(SessionExport, BadInputsGiveClearErrors) {
   EXPECT_NE(read_text(err).find("missing.mocap"), std::string::npos);
   EXPECT_EQ(run(ses, err), 2);  // neither --csv nor --bvh
   EXPECT_NE(read_text(err).find("usage"), std::string::npos);
+}
+
+namespace {
+
+/// A pose whose joint rotations agree with its segment orientations (as the pipeline makes).
+PoseFrame consistent_pose(uint64_t i, std::mt19937& rng) {
+  PoseFrame f = make_pose(i);
+  std::normal_distribution<double> n(0, 0.3);
+  std::array<Eigen::Quaterniond, kSegmentCount> q;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    q[s] = Eigen::Quaterniond(1, n(rng), n(rng), n(rng)).normalized();
+    f.q_earth_segment[s] = {float(q[s].w()), float(q[s].x()), float(q[s].y()), float(q[s].z())};
+    const int parent = kSegmentParent[s];
+    const Eigen::Quaterniond qp = parent < 0 ? q[s] : q[parent].conjugate() * q[s];
+    f.q_parent_segment[s] = {float(qp.w()), float(qp.x()), float(qp.y()), float(qp.z())};
+  }
+  return f;
+}
+
+}  // namespace
+
+TEST(SessionExport, BvhReadsBackThroughTheSkeletonsReaderWithTheRecordedBody) {
+  TempDir dir;
+  const std::string ses = dir.file("b.mocap"), bvh = dir.file("b.bvh"), err = dir.file("err");
+  auto header = make_header();
+  header.config_text = "[body]\nheight_m = 1.62\n";
+  std::mt19937 rng(3);
+  std::vector<PoseFrame> poses;
+  {
+    std::string e;
+    auto w = SessionWriter::create(ses, header, {}, &e);
+    ASSERT_TRUE(w) << e;
+    for (uint64_t i = 0; i < 6; ++i) {
+      poses.push_back(consistent_pose(i, rng));
+      ASSERT_TRUE(w->append_pose(poses.back()));
+    }
+    ASSERT_TRUE(w->close());
+  }
+  ASSERT_EQ(run(ses + " --bvh " + bvh, err), 0) << read_text(err);
+  EXPECT_EQ(read_text(err).find("warning"), std::string::npos) << read_text(err);
+  const std::string text = read_text(bvh);
+  const std::string hierarchy = bvh_hierarchy(BodyModel(body_dimensions_from_height(1.62)));
+  EXPECT_EQ(text.substr(0, hierarchy.size()), hierarchy);
+  const BvhClip clip = parse_bvh(text, bvh);
+  ASSERT_EQ(clip.frame_count, 6);
+  EXPECT_NEAR(clip.frame_time_s, 0.010, 1e-9);  // make_pose frames are 10 ms apart
+  const BvhMotion motion(clip);
+  for (int k = 0; k < 6; ++k) {
+    std::array<Eigen::Quaterniond, kSegmentCount> q;
+    Eigen::Vector3d root;
+    motion.frame(k, q, root);
+    for (int s = 0; s < kSegmentCount; ++s) {
+      const auto& r = poses[k].q_earth_segment[s];
+      const Eigen::Quaterniond expect(r[0], r[1], r[2], r[3]);
+      EXPECT_GT(std::abs(q[s].normalized().dot(expect)), 1 - 1e-6) << "frame " << k << " " << s;
+    }
+    const auto& p = poses[k].p_earth_segment_m[0];
+    EXPECT_NEAR((root - Eigen::Vector3d(p[0], p[1], p[2])).norm(), 0, 1e-5);
+  }
 }

@@ -65,6 +65,9 @@ TEST(DeviceClock, TracksDriftUnderJitter) {
   }
   EXPECT_LT(max_err_late, 0.5e6) << "mapping error should be well under the 2.8 ms jitter";
   EXPECT_NEAR(c.drift(), drift, 30e-6);
+  std::printf(
+      "clock: 200 ppm drift, 0.2-3 ms latency: max mapping error %.3f ms, drift est %.1f ppm\n",
+      max_err_late * 1e-6, c.drift() * 1e6);
 }
 
 TEST(DeviceClock, DetectsRestart) {

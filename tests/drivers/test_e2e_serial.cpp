@@ -40,14 +40,16 @@ int free_udp_port() {
 }
 
 /// Compares every decoded sample with the truth at its device time; returns the max errors.
-Tolerance check_against_truth(const std::vector<ImuSample>& got, const Motion& m, uint8_t fields) {
+/// device_origin_ns: the device clock reading at simulated time 0.
+Tolerance check_against_truth(const std::vector<ImuSample>& got, const Motion& m, uint8_t fields,
+                              int64_t device_origin_ns = 0) {
   Tolerance e{0, 0, 0, 0};
   int64_t last_host = INT64_MIN;
   for (const auto& s : got) {
     EXPECT_EQ(s.valid & fields, fields);
     EXPECT_GE(s.t_host_ns, last_host);
     last_host = s.t_host_ns;
-    const ImuSample t = m.at(s.t_device_ns);
+    const ImuSample t = m.at(s.t_device_ns - device_origin_ns);
     e.gyr_rad_s = std::max(e.gyr_rad_s, (s.gyr_rad_s - t.gyr_rad_s).cwiseAbs().maxCoeff());
     e.acc_m_s2 = std::max(e.acc_m_s2, (s.acc_m_s2 - t.acc_m_s2).cwiseAbs().maxCoeff());
     e.mag_uT = std::max(e.mag_uT, (s.mag_uT - t.mag_uT).cwiseAbs().maxCoeff());
@@ -109,7 +111,12 @@ TEST(E2eSerial, WitmotionOverPtyIsConfiguredByTheDriver) {
                 .corrupt_every = 50};
   SimulatedDevice sim(so);
   sim.start();
-  DeviceSpec spec{.name = "wt0", .protocol = "witmotion", .port = sim.path(), .rate_hz = 100};
+  // device_baud exercises the baud change: device command, host follows (termios on the pty).
+  DeviceSpec spec{.name = "wt0",
+                  .protocol = "witmotion",
+                  .port = sim.path(),
+                  .rate_hz = 100,
+                  .options = {{"device_baud", "115200"}}};
   auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
   test::CollectSink sink;
   dev->start(sink);
@@ -178,6 +185,7 @@ TEST(E2eSerial, LineOverUdp) {
   auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
   test::CollectSink sink;
   dev->start(sink);
+  ASSERT_TRUE(sink.wait_for([&] { return !sink.events_snapshot().empty(); }));  // bound
   SimOptions so{.protocol = "line", .rate_hz = 200, .motion = "rotate", .udp = addr};
   SimulatedDevice sim(so);
   sim.start();
@@ -207,4 +215,88 @@ TEST(E2eSerial, BadSpecsGetClearErrors) {
       make_device({.name = "x", .protocol = "line", .port = "/dev/null", .axis_remap = "x,q,z"},
                   log),
       std::invalid_argument);
+}
+
+TEST(E2eSerial, XbusOverPtyConfiguredWithRolloversDropsAndGarbage) {
+  // The simulated MTi starts streaming at 50 Hz; the driver must switch it to config mode,
+  // set 100 Hz output and go back to measurement. Its packet counter and SampleTimeFine start
+  // just before their wrap points so both roll over during the test.
+  SimOptions so{.protocol = "xbus",
+                .rate_hz = 50,
+                .motion = "rotate",
+                .options = {{"counter_start", "65450"}, {"time_start_ticks", "4294962296"}},
+                .pty_link = temp_link("mti0"),
+                .drop_every = 41,
+                .garbage_every = 29,
+                .corrupt_every = 53};
+  SimulatedDevice sim(so);
+  sim.start();
+  DeviceSpec spec{.name = "mti0",
+                  .protocol = "xbus",
+                  .port = sim.path(),
+                  .rate_hz = 100,
+                  .options = {{"mag_scale_uT", "50"}}};
+  auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
+  test::CollectSink sink;
+  dev->start(sink);
+  ASSERT_TRUE(sink.wait_for([&] { return sink.count() >= 250; }));
+  dev->stop();
+  sim.stop();
+  const auto got = sink.snapshot();
+  const auto err =
+      check_against_truth(got, sim.motion(), kFieldGyr | kFieldAcc | kFieldMag | kFieldQuat,
+                          int64_t{4294962296} * 100'000);
+  // float32 on the wire: relative precision 6e-8.
+  EXPECT_LT(err.gyr_rad_s, 1e-6);
+  EXPECT_LT(err.acc_m_s2, 1e-5);
+  EXPECT_LT(err.mag_uT, 1e-4);
+  EXPECT_LT(err.q_rad, 1e-6);
+  // Device time unwrapped across the 2^32-tick rollover: strictly increasing, 10 ms steps at 100
+  // Hz.
+  int steps10 = 0;
+  for (std::size_t i = 1; i < got.size(); ++i) {
+    EXPECT_GT(got[i].t_device_ns, got[i - 1].t_device_ns);
+    steps10 += got[i].t_device_ns - got[i - 1].t_device_ns == 10'000'000;
+  }
+  EXPECT_GT(steps10, 150);
+  const auto st = dev->stats().decoder;
+  // Every counter step that skipped is a drop; samples lost to garbage/corruption count too.
+  uint64_t missing = 0;
+  for (std::size_t i = 1; i < got.size(); ++i)
+    missing += got[i].seq - got[i - 1].seq - 1;
+  EXPECT_EQ(st.dropped_samples, missing);
+  EXPECT_GT(st.dropped_samples, 0u);
+  EXPECT_GT(st.checksum_errors + st.resyncs, 0u);
+  std::printf(
+      "xbus/pty: %zu samples, err gyr %.1e acc %.1e q %.1e, drops %llu, checksum %llu, resyncs "
+      "%llu\n",
+      got.size(), err.gyr_rad_s, err.acc_m_s2, err.q_rad, (unsigned long long)st.dropped_samples,
+      (unsigned long long)st.checksum_errors, (unsigned long long)st.resyncs);
+}
+
+TEST(E2eSerial, MocapSimulateCommandServesTheDriver) {
+  // The CLI prints the pty path; the driver reads the WitMotion stream it emits.
+  const std::string cmd =
+      std::string(MOCAP_BINARY_DIR) +
+      "/bin/mocap simulate --protocol witmotion --pty --rate 50 --duration 3 2>/dev/null";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  char line[256] = {0};
+  ASSERT_NE(std::fgets(line, sizeof line, p), nullptr);
+  std::string path(line);
+  ASSERT_EQ(path.rfind("pty: ", 0), 0u) << path;
+  path = path.substr(5, path.find('\n') - 5);
+  DeviceSpec spec{.name = "cli", .protocol = "witmotion", .port = path, .rate_hz = 100};
+  auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::error));
+  test::CollectSink sink;
+  dev->start(sink);
+  const bool ok = sink.wait_for([&] { return sink.count() >= 100; });
+  dev->stop();
+  ::pclose(p);
+  ASSERT_TRUE(ok);
+  // Default motion is "rotate": the decoded yaw rate is 90 deg/s about z while roll is small.
+  const auto got = sink.snapshot();
+  EXPECT_TRUE(std::any_of(got.begin(), got.end(), [](const ImuSample& s) {
+    return s.has(kFieldGyr) && std::abs(s.gyr_rad_s.norm() - M_PI / 2) < 0.6;
+  }));
 }

@@ -78,7 +78,13 @@ TEST(Witmotion, WritesNeedUnlockAndRegisterReadReplies) {
   enc->handle_host_bytes(witmotion::command(witmotion::kRegRead, witmotion::kRegRsw), reply);
   ASSERT_EQ(reply.size(), 11u);
   EXPECT_EQ(reply[1], witmotion::kRegReply);
-  EXPECT_EQ(reply[2], 0x1E);  // RSW default
+  EXPECT_EQ(reply[2], 0x1E);                        // RSW default
+  EXPECT_EQ(reply[6], witmotion::baud_code(9600));  // register 0x04 = BAUD
+  enc->handle_host_bytes(witmotion::command(witmotion::kRegBaud, witmotion::baud_code(115200)),
+                         reply);
+  enc->handle_host_bytes(witmotion::command(witmotion::kRegRead, witmotion::kRegRsw), reply);
+  ASSERT_EQ(reply.size(), 22u);
+  EXPECT_EQ(reply[11 + 6], witmotion::baud_code(115200));
 }
 
 TEST(Witmotion, QuaternionOrderOption) {

@@ -53,7 +53,7 @@ inline SynthStream make_stream(const SynthConfig& c) {
   const double ts = 1.0 / c.rate_hz;
   const int n = static_cast<int>(c.duration_s * c.rate_hz);
   Eigen::Quaterniond q = c.q0;
-  const int sub = 20;
+  const int sub = std::max(2, static_cast<int>(2000.0 / c.rate_hz));  // fine steps per period
   for (int k = 0; k < n; ++k) {
     const double t = k * ts;
     if (k > 0) {  // integrate the true rate over (t - ts, t] in fine steps (midpoint rule)

@@ -149,6 +149,30 @@ TEST(Skeleton, RejectsNonFiniteInputAndFlagsStaleSensors) {
   EXPECT_FALSE(f.segment_flags[6] & kSegStale);
 }
 
+TEST(Skeleton, SilentSensorIsInferredAndHeadingResetFacesTarget) {
+  Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full());
+  const Eigen::Quaterniond facing = yaw_rotation(50 * kDegToRad);
+  for (int s = 0; s < kSegmentCount; ++s)
+    sk.set_sensor_orientation(s, facing, 0);
+  sk.set_sensor_orientation(index(Segment::hand_r), axis_rotation(0, 1.0), 0);
+  sk.set_sensor_live(index(Segment::hand_r), false);
+  PoseFrame f;
+  sk.solve(5 * kMs, f);
+  EXPECT_EQ(f.t_ns, 5 * kMs);
+  EXPECT_TRUE(f.segment_flags[index(Segment::hand_r)] & kSegInferred);
+  EXPECT_LT(angle_between_deg(sk.q_earth_segment()[index(Segment::hand_r)], facing), 1e-9);
+  sk.set_sensor_live(index(Segment::hand_r), true);
+  sk.solve(f);
+  EXPECT_TRUE(f.segment_flags[index(Segment::hand_r)] & kSegTracked);
+  // Heading reset to face +x: every segment's yaw becomes 0.
+  sk.set_sensor_orientation(index(Segment::hand_r), facing, 0);
+  const double east = 0;
+  sk.reset_heading(&east);
+  sk.solve(f);
+  for (int s = 0; s < kSegmentCount; ++s)
+    EXPECT_LT(angle_between_deg(sk.q_earth_segment()[s], Eigen::Quaterniond::Identity()), 1e-9);
+}
+
 TEST(Skeleton, DeterministicBitIdenticalFrames) {
   std::mt19937 rng(12);
   std::vector<std::array<Eigen::Quaterniond, kSegmentCount>> poses;

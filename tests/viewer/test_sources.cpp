@@ -99,10 +99,10 @@ TEST(ShmSource, WaitsForTheDaemonThenShowsItsNewestFrame) {
   EXPECT_FALSE(src.poll(0.0, frames));
   EXPECT_NE(src.status().find("WAITING"), std::string::npos);
 
-  PostureWriter writer(name);
+  auto writer = std::make_unique<PostureWriter>(name);
   PoseFrame f = reference_pose(body_dimensions_from_height(1.7), Eigen::Vector3f(1, 2, 0));
   f.frame = 7;
-  writer.publish(f);
+  writer->publish(f);
   EXPECT_FALSE(src.poll(0.1, frames)) << "retries at most twice a second";
   ASSERT_TRUE(src.poll(0.6, frames));
   ASSERT_EQ(frames.size(), 1u);
@@ -110,10 +110,21 @@ TEST(ShmSource, WaitsForTheDaemonThenShowsItsNewestFrame) {
   EXPECT_FLOAT_EQ(frames[0].p_earth_segment_m[0][0], 1.0f);
   EXPECT_FALSE(src.poll(0.7, frames)) << "nothing new published";
   f.frame = 8;
-  writer.publish(f);
+  writer->publish(f);
   ASSERT_TRUE(src.poll(0.8, frames));
   EXPECT_EQ(frames[0].frame, 8u);
   EXPECT_NE(src.status().find(name), std::string::npos);
+
+  // The daemon restarts: a new segment under the same name. The viewer maps it again.
+  writer.reset();
+  auto restarted = std::make_unique<PostureWriter>(name);
+  f.frame = 100;
+  restarted->publish(f);
+  double t = 0.9;
+  for (; t < 5 && (frames[0].frame != 100); t += 0.1)
+    src.poll(t, frames);
+  EXPECT_EQ(frames[0].frame, 100u) << "still showing the old daemon's frame";
+  EXPECT_LT(t, 4.0);
 }
 
 }  // namespace

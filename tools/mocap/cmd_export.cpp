@@ -1,14 +1,19 @@
 // mocap export: converts the poses recorded in a session file (docs/session-format.md) to CSV
-// (t,segment,w,x,y,z,px,py,pz: one row per segment per frame) or BVH. A torn or corrupt tail is
-// reported and everything before it is exported.
+// (t,segment,w,x,y,z,px,py,pz: one row per segment per frame) or BVH (the skeleton's BvhWriter,
+// body height from the recorded configuration). A torn or corrupt tail is reported and
+// everything before it is exported.
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 
 #include "commands.hpp"
 #include "mocap/core/cli_args.hpp"
+#include "mocap/daemon/config.hpp"
 #include "mocap/daemon/session_reader.hpp"
+#include "mocap/skeleton/body_model.hpp"
+#include "mocap/skeleton/bvh.hpp"
 
 namespace mocap::cmd {
 namespace {
@@ -16,9 +21,10 @@ namespace {
 constexpr const char* kUsage =
     "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh)\n"
     "Converts the poses recorded in SESSION. CSV columns: t (seconds since the recording\n"
-    "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n";
+    "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n"
+    "BVH: N-pose rest, centimetres, the session's mean frame interval, the recorded body height.\n";
 
-/// Reports how reading ended; returns false if the session could not be read at all.
+/// Tells the user how reading ended when it did not end cleanly.
 void report_tail(const daemon::SessionReader& r, const std::string& path) {
   using End = daemon::SessionReader::End;
   if (r.end() == End::torn)
@@ -71,6 +77,63 @@ int export_csv(daemon::SessionReader& r, const std::string& in, const std::strin
   return 0;
 }
 
+/// Body height from the configuration recorded in the session (the one the poses were
+/// computed with); the default height, with a warning, if it does not parse.
+double recorded_height_m(const daemon::SessionReader& r, const std::string& in) {
+  daemon::ConfigErrors errors;
+  const auto cfg =
+      daemon::parse_config(r.header().config_text, in + " (recorded config)", {}, errors);
+  if (cfg) return cfg->body.height_m;
+  const double fallback = daemon::BodyConfig{}.height_m;
+  std::fprintf(stderr,
+               "mocap export: warning: the recorded configuration does not parse (%s); using "
+               "body height %.2f m\n",
+               errors.errors.empty() ? "empty" : errors.errors.front().to_string().c_str(),
+               fallback);
+  return fallback;
+}
+
+int export_bvh(daemon::SessionReader& r, const std::string& in, const std::string& out) {
+  // First pass: frame count and mean frame interval (BVH has one fixed frame time).
+  daemon::SessionReader::Block b;
+  long frames = 0;
+  int64_t t_first = 0, t_last = 0;
+  while (r.next(b)) {
+    if (b.type != daemon::session::BlockType::pose) continue;
+    if (frames == 0) t_first = b.pose.t_ns;
+    t_last = b.pose.t_ns;
+    ++frames;
+  }
+  report_tail(r, in);
+  if (frames == 0) {
+    std::fprintf(stderr, "mocap export: %s holds no poses\n", in.c_str());
+    return 1;
+  }
+  BvhWriterOptions opt;
+  if (frames > 1 && t_last > t_first)
+    opt.frame_time_s =
+        static_cast<double>(t_last - t_first) * 1e-9 / static_cast<double>(frames - 1);
+  const double height_m = recorded_height_m(r, in);
+  daemon::SessionReader again;
+  std::string error;
+  if (!again.open(in, &error)) {
+    std::fprintf(stderr, "mocap export: %s\n", error.c_str());
+    return 1;
+  }
+  try {
+    BvhWriter writer(out, BodyModel(body_dimensions_from_height(height_m)), opt);
+    while (again.next(b))
+      if (b.type == daemon::session::BlockType::pose) writer.write_frame(b.pose);
+    writer.close();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mocap export: %s\n", e.what());
+    return 1;
+  }
+  std::fprintf(stderr, "mocap export: %ld frames (%.3f s each, body height %.2f m) -> %s\n", frames,
+               opt.frame_time_s, height_m, out.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int run_export(int argc, char** argv) {
@@ -98,8 +161,7 @@ int run_export(int argc, char** argv) {
     return 1;
   }
   if (args.has("csv")) return export_csv(reader, in, *args.get("csv"));
-  std::fprintf(stderr, "mocap export: --bvh needs the skeleton's BVH writer (not built yet)\n");
-  return 1;
+  return export_bvh(reader, in, *args.get("bvh"));
 }
 
 }  // namespace mocap::cmd

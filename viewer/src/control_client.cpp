@@ -21,12 +21,13 @@ std::string default_control_socket_path() {
   return "/tmp/mocapd-" + std::to_string(getuid()) + ".sock";
 }
 
+// Request lines of the daemon's control protocol (mocap/daemon/control.hpp).
 std::string calibrate_request(const std::string& pose) {
-  return nlohmann::json{{"cmd", "calibrate"}, {"pose", pose}}.dump();
+  return "calibrate " + pose;
 }
 
 std::string heading_reset_request() {
-  return nlohmann::json{{"cmd", "heading_reset"}}.dump();
+  return "reset-heading";
 }
 
 namespace {

@@ -2,6 +2,7 @@
 // last one as a PNG (for tests and documentation; runs under Xvfb + Mesa llvmpipe).
 #include <chrono>
 #include <cstdio>
+#include <thread>
 
 #include "mocap/viewer/gl_util.hpp"
 #include "mocap/viewer/offscreen.hpp"
@@ -16,17 +17,26 @@ int run_screenshot(const ViewerOptions& o) {
   int rc = 0;
   {
     Offscreen target(o.width, o.height);
-    View view(body_dimensions_from_height(o.height_m));
+    View view(source->dimensions() ? *source->dimensions()
+                                   : body_dimensions_from_height(o.height_m));
     view.settings = o.settings;
     view.camera = OrbitCamera::framing(o.avatars);
     const auto start = std::chrono::steady_clock::now();
-    bool any_pose = false;
+    auto wall_s = [&] {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    // Live sources (daemon, network) run on the wall clock and get a few seconds to deliver a
+    // first pose; the synthetic and file sources step a fixed 60 Hz clock (reproducible images).
+    const bool live = o.source == "shm" || o.source == "connect";
+    if (live) {
+      while (!source->poll(wall_s(), view.frames) && wall_s() < o.wait_s)
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    bool any_pose = !view.frames.empty();
     for (int i = 0; i < o.frames; ++i) {
-      source->poll(static_cast<double>(i) / 60.0, view.frames);
+      source->poll(live ? wall_s() : static_cast<double>(i) / 60.0, view.frames);
       any_pose = any_pose || !view.frames.empty();
-      const double wall_s =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      view.hud.fps = wall_s > 0 ? i / wall_s : 0;
+      view.hud.fps = wall_s() > 0 ? i / wall_s() : 0;
       view.hud.source = source->status();
       target.bind();
       view.render(o.width, o.height);

@@ -137,10 +137,12 @@ void build_hud(TextRenderer& t, const HudInfo& hud, const ViewSettings& settings
 
   const float bottom = static_cast<float>(height) - 12 - lh;
   if (!hud.message.empty()) panel_text(t, 12, bottom - lh - 6, 2, hud.message.c_str(), kYellow);
-  panel_text(t, 12, bottom, 2,
-             "DRAG ORBIT  RDRAG PAN  WHEEL ZOOM  R RESET  F FOLLOW  S STICK  A AXES  E EARTH  "
-             "SPACE PAUSE  N/T CALIB  H HEADING  Q QUIT",
-             kGrey);
+  const char* keys =
+      "DRAG ORBIT  RDRAG PAN  WHEEL ZOOM  R RESET  F FOLLOW  S STICK  A AXES  E EARTH  "
+      "SPACE PAUSE  N/T CALIB  H HEADING  Q QUIT";
+  const int key_scale = TextRenderer::text_width(keys, 2) + 24 > static_cast<float>(width) ? 1 : 2;
+  panel_text(t, 12, static_cast<float>(height) - 12 - TextRenderer::line_height(key_scale),
+             key_scale, keys, kGrey);
 }
 
 }  // namespace mocap::viewer

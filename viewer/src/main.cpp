@@ -4,6 +4,8 @@
 
 #include "mocap/core/cli_args.hpp"
 #include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/viewer/bvh_source.hpp"
+#include "mocap/viewer/net_source.hpp"
 #include "mocap/viewer/shm_source.hpp"
 #include "mocap/viewer/synthetic_source.hpp"
 #include "viewer_options.hpp"
@@ -16,12 +18,13 @@ std::unique_ptr<PoseSource> make_source(const ViewerOptions& o) {
   if (o.source == "shm")
     return std::make_unique<ShmSource>(o.shm_name.empty() ? default_posture_shm_name()
                                                           : o.shm_name);
-  if (o.source == "connect")
-    throw std::runtime_error("--connect " + o.connect +
-                             ": network streams are not supported by this build yet");
-  if (o.source == "play")
+  if (o.source == "connect") return std::make_unique<NetSource>(o.connect);
+  if (o.source == "play") {
+    if (o.play.size() >= 4 && o.play.compare(o.play.size() - 4, 4, ".bvh") == 0)
+      return std::make_unique<BvhSource>(o.play);
     throw std::runtime_error("--play " + o.play +
-                             ": file playback is not supported by this build yet");
+                             ": only BVH files (.bvh) can be played back so far");
+  }
   throw std::runtime_error("unknown --source '" + o.source + "' (shm, synthetic)");
 }
 
@@ -58,6 +61,7 @@ int main(int argc, char** argv) {
       .option("size", "window or image size WxH (1280x720)")
       .option("screenshot", "render headless and write this PNG, then exit")
       .option("frames", "frames to render before the screenshot (30)")
+      .option("wait", "headless: seconds to wait for a live source's first pose (5)")
       .option("bench-seconds", "seconds per benchmark case (3)")
       .option("control", "daemon control socket (default $XDG_RUNTIME_DIR/mocapd.sock)")
       .flag("bench", "measure frame rates (1 and 150 avatars) and print JSON")
@@ -94,6 +98,8 @@ int main(int argc, char** argv) {
   if (!cli.get_int("frames", frames) || frames < 1 || frames > 1000000)
     return usage(cli, "--frames must be a positive integer");
   o.frames = static_cast<int>(frames);
+  if (!cli.get_double("wait", o.wait_s) || !(o.wait_s >= 0))
+    return usage(cli, "--wait must be a number of seconds");
   if (!cli.get_double("bench-seconds", o.bench_seconds) || !(o.bench_seconds > 0))
     return usage(cli, "--bench-seconds must be positive");
   o.bench = cli.has("bench");
@@ -104,7 +110,7 @@ int main(int argc, char** argv) {
   o.settings.hud = !cli.has("no-hud");
   o.settings.labels = !cli.has("no-labels");
   o.settings.shadows = !cli.has("no-shadows");
-  o.settings.follow = cli.has("follow");
+  o.settings.follow = cli.has("follow") || o.source == "play";  // files walk off anywhere
 
   try {
     if (o.bench) return run_bench(o);

@@ -111,7 +111,7 @@ SceneRenderer::SceneRenderer() {
   floor_program_ = make_program(kFloorVs, kFloorFs, "floor");
   glGenBuffers(1, &instance_vbo_);
   high_ = make_capsule_mesh(20, 7);
-  low_ = make_capsule_mesh(9, 3);
+  low_ = make_capsule_mesh(6, 2);
   glGenVertexArrays(1, &floor_vao_);
 }
 

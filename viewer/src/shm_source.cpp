@@ -21,7 +21,16 @@ bool ShmSource::poll(double t_s, std::vector<PoseFrame>& frames) {
   }
   if (paused_) return false;
   const uint64_t seq = reader_->sequence();
-  if (seq == last_sequence_ && !frames.empty()) return false;
+  if (seq == last_sequence_ && !frames.empty()) {
+    // Silent for 2 s: the daemon may have restarted with a new segment under the same name, so
+    // map it again (harmless if it is only idle).
+    if (t_s - last_change_s_ > 2.0) {
+      reader_.reset();
+      last_change_s_ = t_s;
+    }
+    return false;
+  }
+  last_change_s_ = t_s;
   PoseFrame f;
   if (!reader_->read(f)) return false;
   last_sequence_ = seq;

@@ -18,8 +18,11 @@ void View::render(int width, int height) {
     camera.target_m.y() = p[1];
   }
   SceneRenderer::Options opt;
-  opt.shadows = settings.shadows;
-  opt.low_detail = frames.size() > 24;
+  // Crowds: coarser capsules and no shadow pass (llvmpipe shades vertices on one thread, so
+  // triangles are what a crowd costs).
+  const bool crowd = frames.size() > 24;
+  opt.shadows = settings.shadows && !crowd;
+  opt.low_detail = crowd;
   scene_.draw(camera, width, height, capsules_, opt);
   if (!settings.hud && !settings.labels) return;
   text_.begin(width, height);

@@ -121,7 +121,8 @@ int run_window(const ViewerOptions& o) {
   GLFWwindow* window = create_gl_window(o.width, o.height, true, "mocap-viewer");
   glfwSwapInterval(o.vsync ? 1 : 0);
   {
-    View view(body_dimensions_from_height(o.height_m));
+    View view(source->dimensions() ? *source->dimensions()
+                                   : body_dimensions_from_height(o.height_m));
     view.settings = o.settings;
     view.camera = OrbitCamera::framing(o.avatars);
     App app;

@@ -20,6 +20,7 @@ struct ViewerOptions {
   int width = 1280, height = 720;
   std::string screenshot;  ///< PNG path: headless mode
   int frames = 30;         ///< frames rendered before the screenshot
+  double wait_s = 5;       ///< headless: how long to wait for a live source's first pose
   bool bench = false;
   double bench_seconds = 3;
   bool vsync = true;

@@ -65,7 +65,7 @@ class DeviceClock {
 
   Params p_;
   bool started_ = false;
-  int64_t last_device_ns_ = 0, last_read_ns_ = 0, last_out_ns_ = 0;
+  int64_t last_device_ns_ = 0, last_read_ns_ = 0, last_out_ns_ = INT64_MIN;
   int64_t ref_device_ns_ = 0;  ///< device time origin of the fit (keeps numbers small)
   int64_t base_offset_ = 0;    ///< first offset; the fit works on offsets relative to it
   int64_t window_start_ns_ = 0;

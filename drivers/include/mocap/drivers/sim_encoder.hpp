@@ -32,6 +32,9 @@ class ProtocolEncoder {
   /// Bytes the host wrote; appends the device's replies and applies the commands.
   virtual void handle_host_bytes(std::span<const uint8_t> /*in*/, std::vector<uint8_t>& /*reply*/) {
   }
+  /// For one-way links (UDP): the reports a host would otherwise request at open, such as the
+  /// calibration (appended as whole reports). Default: none.
+  virtual void unsolicited(std::vector<uint8_t>& /*out*/) {}
   /// HID feature report `id` (calibration); false if the device has none.
   virtual bool feature_report(uint8_t /*id*/, std::vector<uint8_t>& /*out*/) { return false; }
   /// False while the device is not streaming (e.g. Xbus configuration mode).

@@ -29,6 +29,11 @@ class ByteTransport {
     err = "feature reports are not supported by this transport";
     return -1;
   }
+  /// Sends a HID feature report (bytes[0] = report id). False + err if unsupported/failed.
+  virtual bool set_feature(std::span<const uint8_t> /*bytes*/, std::string& err) {
+    err = "feature reports are not supported by this transport";
+    return false;
+  }
   virtual bool set_baud(int /*baud*/, std::string& /*err*/) { return true; }
   /// True when each read returns one whole record (UDP datagram, HID report, USB transfer).
   virtual bool record_framed() const { return false; }

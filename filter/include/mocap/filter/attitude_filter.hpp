@@ -19,6 +19,13 @@ struct FilterParams {
   // --- inclination and heading ---
   double tau_acc_s = 3.0;  ///< low-pass of acc in the almost-inertial frame (inclination)
   double tau_mag_s = 9.0;  ///< nominal heading time constant in an undisturbed field
+  /// Adaptive inclination: a second, faster low-pass (tau_acc_fast_s) is blended in when
+  /// gyro errors (which grow with the rotation rate w) outweigh linear-acceleration errors
+  /// (which grow with the linear acceleration a). Fast weight: rho^2 / (rho^2 + rho_ref^2),
+  /// rho = RMS(w) / RMS(a) over acc_dyn_tau_s (a = |acc_I - LP(acc_I)|). 0 disables.
+  double tau_acc_fast_s = 2.0;
+  double acc_dyn_ref_rad_s_per_m_s2 = 1.0;  ///< rho_ref, (rad/s) per (m/s^2)
+  double acc_dyn_tau_s = 1.0;
   // --- gyro bias (Kalman filter, sigma values in deg/s) ---
   bool rest_bias_est = true;             ///< estimate bias while at rest
   bool motion_bias_est = true;           ///< estimate horizontal bias from inclination corrections
@@ -42,16 +49,30 @@ struct FilterParams {
   double mag_new_time_s = 20.0;         ///< a new consistent field is accepted after this
   double mag_new_first_time_s = 5.0;    ///< ... or this for the first field
   double mag_new_min_gyr_deg_s = 20.0;  ///< only while rotating at least this fast
+  /// VQF accepts even the first field only while rotating; ours accepts the first field at
+  /// rest too (start-up stand-still = clean reference, full rejection budget for the session).
+  bool mag_first_needs_rotation = false;
   double mag_min_undisturbed_time_s = 0.5;
   double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
   double mag_rejection_factor = 2.0;       ///< gain divisor after that
   // --- extensions beyond VQF (false/0 = plain VQF behaviour) ---
-  /// Gyro-consistency test: in a homogeneous field the magnetometer heading seen in the
-  /// gyro-stabilised 6D frame only drifts slowly; RMS wobble of it (about its 1 s mean) above
-  /// this threshold marks the field as disturbed (gradients, hard iron moving with the sensor).
-  /// 0 disables (default: on BROAD it rejected good fields in fast motion and cost accuracy).
-  double mag_consistency_th_deg = 0.0;
+  /// Gyro-consistency test: in a homogeneous field the magnetometer vector seen in the
+  /// almost-inertial frame (gyro only, no inclination involved) stays constant. Its RMS
+  /// deviation from its own mean over mag_consistency_tau_s, relative to the field norm, above
+  /// this threshold marks the field as disturbed (gradients, magnets moving with the sensor).
+  /// 0 disables: the default, because on BROAD rejecting more often cost more accuracy (fast
+  /// rotation needs magnetometer updates) than it saved; kept for experiments.
+  double mag_consistency_th = 0.0;
   double mag_consistency_tau_s = 1.0;  ///< averaging window of that test
+  /// Online hard-iron estimation (a sensor-fixed field offset h, e.g. a magnet on the housing):
+  /// in the almost-inertial frame q_gyr (m - h) is constant, which is linear in (field, h);
+  /// solved by exponentially weighted least squares over hard_iron_tau_s. h is used only when
+  /// the rotation excitation (smallest eigenvalue of the normalised information matrix) exceeds
+  /// hard_iron_min_excitation and the fit residual is below hard_iron_max_residual x |field|.
+  /// hard_iron_tau_s = 0 disables.
+  double hard_iron_tau_s = 0.0;  // off: on BROAD it fitted room-field gradients as h
+  double hard_iron_min_excitation = 0.3;
+  double hard_iron_max_residual = 0.03;
   // --- input handling ---
   double max_gap_s = 0.25;      ///< longer gaps integrate the gyro only over this span
   double max_gyr_rad_s = 70.0;  ///< |gyr| above this is rejected (about 4000 deg/s)
@@ -72,7 +93,9 @@ struct FilterCounters {
 /// Coefficients derived from params and the sampling periods (not saved; recomputed).
 struct FilterCoeffs {
   double gyr_ts_s = 0, acc_ts_s = 0, mag_ts_s = 0;
-  filt::LowpassCoeffs acc_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
+  filt::LowpassCoeffs acc_lp, acc_fast_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
+  double k_acc_dyn = 0;
+  double k_hard_iron = 0;
   double k_mag = 0, k_mag_ref = 0, k_mag_consistency = 0;
   int bias_decim = 1;           ///< bias KF runs every bias_decim acc samples (about 100 Hz)
   double bias_ts_s = 0;         ///< its period
@@ -93,7 +116,9 @@ struct FilterState {
   double gyr_ts_nom_s = 0, acc_ts_nom_s = 0, mag_ts_nom_s = 0;  ///< tracked sampling periods
   Eigen::Vector3d last_gyr_rad_s = Eigen::Vector3d::Zero();
   // inclination
-  filt::Lowpass<3> acc_lp;
+  filt::Lowpass<3> acc_lp, acc_fast_lp;
+  double acc_dyn_m2_s4 = 0;    ///< smoothed squared linear-acceleration estimate
+  double gyr_dyn_rad2_s2 = 0;  ///< smoothed squared rotation rate
   Eigen::Vector3d last_acc_earth = Eigen::Vector3d::UnitZ();
   // bias
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();
@@ -117,8 +142,16 @@ struct FilterState {
   double mag_cand_norm = -1, mag_cand_dip = 0, mag_cand_t_s = 0;
   filt::Lowpass<2> mag_norm_dip_lp;
   double mag_norm_dip[2] = {0, 0};
-  double mag_err_mean_rad = 0, mag_err_var_rad2 = 0;  ///< consistency test state
-  bool mag_err_init = false;
+  Eigen::Vector3d mag_i_mean = Eigen::Vector3d::Zero();  ///< consistency test: mean of q_gyr m
+  double mag_i_var_rel = 0;                              ///< and relative deviation power
+  bool mag_i_init = false;
+  // hard-iron least squares: weight, sum R, sum R m, sum m, sum |m|^2; current estimate
+  double hi_w = 0, hi_e = 0;
+  Eigen::Matrix3d hi_s = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d hi_u = Eigen::Vector3d::Zero(), hi_v = Eigen::Vector3d::Zero();
+  Eigen::Vector3d hard_iron_uT = Eigen::Vector3d::Zero();
+  bool hard_iron_valid = false;
+  int hi_n = 0;
 };
 
 /// Quaternion attitude filter for one sensor. Allocation-free update.
@@ -150,6 +183,7 @@ class AttitudeFilter {
   void update_gyr(const Eigen::Vector3d& gyr, double dt_s);
   void update_acc(const Eigen::Vector3d& acc, double dt_s);
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
+  void update_hard_iron(const Eigen::Vector3d& mag);
   void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
   bool stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double& ts_nom, double& dt_s);
   void refresh_coeffs();

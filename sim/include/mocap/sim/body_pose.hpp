@@ -21,9 +21,6 @@ struct BodyPose {
   Eigen::Vector3d p_earth_pelvis_m = Eigen::Vector3d::Zero();  ///< pelvis origin (hip midpoint)
   /// Joint rotation of each segment relative to its parent (index 0, the pelvis, is unused).
   std::array<Eigen::Quaterniond, kSegmentCount> q_parent_segment;
-  /// Share of the body weight on the right foot (0..1) when the motion prescribes it (a gait
-  /// cycle); negative: the lower ankle bears the weight.
-  double weight_right = -1;
   BodyPose() { q_parent_segment.fill(Eigen::Quaterniond::Identity()); }
 };
 

@@ -28,7 +28,17 @@ class Motion {
   /// Interval [start, end] in seconds during which the performer stands still in the N-pose
   /// (the calibration pose). Every built-in motion starts with one.
   virtual std::pair<double, double> calibration_window_s() const { return {0.0, 0.0}; }
+  /// Body dimensions the motion was made for (e.g. a BVH file's bone lengths); nullptr: any.
+  virtual const BodyDimensions* dimensions() const { return nullptr; }
 };
+
+/// A BVH file as motion input (via the skeleton's BvhMotion): a `lead_in_s` N-pose stand facing
+/// the clip's first heading (calibration), a smooth `blend_s` transition into the first frame,
+/// then the clip, interpolated with Catmull-Rom (C1) so the virtual accelerometers see finite
+/// accelerations. Carries its own root trajectory and the file's body dimensions. Throws
+/// std::runtime_error for unreadable or unrecognisable files.
+std::unique_ptr<Motion> make_bvh_motion(const std::string& path, double lead_in_s = 3.0,
+                                        double blend_s = 1.0);
 
 /// Names accepted by make_motion: "npose", "walk", "turn", "squat", "arm_raise", "reach" (each
 /// preceded by a 3 s N-pose stand and followed by a 1 s stand) and "sequence" (all of them
@@ -53,8 +63,12 @@ class MotionTrack {
  private:
   void local_pose(double t_s, BodyPose& out) const;  // within one period, root from the table
   Eigen::Vector3d root_velocity(double t_s) const;   // horizontal, from the planted feet
-  void planted_root(const BodyPose& orientations, double& z_m, Eigen::Vector3d& rel_l,
-                    Eigen::Vector3d& rel_r, double& w_r) const;
+  struct Contacts {
+    Eigen::Vector3d p[4];  // heel_l, toe_l, heel_r, toe_r relative to the pelvis, earth axes
+    double w[4];           // share of the weight on each
+    double z_m;            // pelvis height that puts the weighted contact on the floor
+  };
+  void contacts(const BodyPose& orientations, Contacts& out) const;
 
   std::shared_ptr<const Motion> motion_;
   BodyDimensions dims_;

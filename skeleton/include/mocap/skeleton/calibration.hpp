@@ -69,11 +69,13 @@ void save_calibration(const Calibration& c, const std::string& path);
 Calibration load_calibration(const std::string& path);
 
 /// Heading-only reset (the person stands upright facing forward): each tracked segment's earth
-/// yaw is re-aligned to the pelvis's (or the circular mean when the pelvis has no sensor).
+/// yaw is re-aligned to the pelvis's (or the circular mean when the pelvis has no sensor), or to
+/// `target_heading_rad` when given (e.g. 0: the performer faces +x, east, afterwards).
 /// `q_earth_sensor` holds the latest orientation per segment; `have` says which are valid.
 void apply_heading_reset(Calibration& c,
                          const std::array<Eigen::Quaterniond, kSegmentCount>& q_earth_sensor,
-                         const std::array<bool, kSegmentCount>& have);
+                         const std::array<bool, kSegmentCount>& have,
+                         const double* target_heading_rad = nullptr);
 
 struct CalibratorOptions {
   double capture_s = 2.0;                ///< capture duration

@@ -17,8 +17,13 @@ namespace mocap {
 struct RootMotionOptions {
   bool pinned = false;  ///< true: the pelvis stays at pinned_position_m
   Eigen::Vector3d pinned_position_m = Eigen::Vector3d(0, 0, -1);  ///< z < 0: model pelvis height
-  double stance_hysteresis_m = 0.01;  ///< the other foot must be this much lower to take over
-  bool floor_contact = true;          ///< keep the lowest contact point on the floor (z = 0)
+  /// The other foot must be this much lower to take over. 3 cm: measured on the simulated
+  /// performer's walk (1 cm switched too early at heel strike: 48 % root drift; 3 cm: 4 %).
+  double stance_hysteresis_m = 0.03;
+  bool floor_contact = true;  ///< keep the lowest contact point on the floor (z = 0)
+  /// true: both contact points of a foot are its ankle projected to the sole (planted-ankle
+  /// model, like the simulator); false: heel and toe points (rolling foot).
+  bool ankle_contact = false;
 };
 
 class RootMotion {

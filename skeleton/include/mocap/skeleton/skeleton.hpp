@@ -48,8 +48,12 @@ class Skeleton {
   void set_calibration(const Calibration& c) { calib_ = c; }
   const Calibration& calibration() const { return calib_; }
   void clear_calibration() { calib_ = Calibration{}; }
-  /// Heading-only reset from the latest sensor orientations (the person stands facing forward).
-  void reset_heading();
+  /// Heading-only reset from the latest sensor orientations (the person stands facing forward):
+  /// every segment takes the pelvis's heading, or `target_heading_deg` when given (0 = face +x).
+  void reset_heading(const double* target_heading_deg = nullptr);
+  /// A silent sensor (live = false) stops driving its segment, which is then inferred, until
+  /// it is marked live again. Sensors are live by default.
+  void set_sensor_live(int segment, bool live);
 
   /// Newest orientation of the sensor on `segment` (earth frame). Non-finite or zero quaternions
   /// are rejected (counted in rejected_samples()). sensor_flags: SegmentFlag bits reported by
@@ -61,6 +65,8 @@ class Skeleton {
   /// (frame, t_ns, calibrated flag, orientations, positions, joint rotations, violations,
   /// segment flags); leaves out.sensors / sensor_count and the other frame flags to the caller.
   void solve(PoseFrame& out);
+  /// Same, at an explicit time t_ns (staleness is judged against t_ns; out.t_ns = t_ns).
+  void solve(int64_t t_ns, PoseFrame& out);
 
   /// Results of the last solve in double precision.
   const std::array<Eigen::Quaterniond, kSegmentCount>& q_earth_segment() const { return q_earth_; }
@@ -91,6 +97,7 @@ class Skeleton {
   std::array<Eigen::Quaterniond, kSegmentCount> q_es_;
   std::array<int64_t, kSegmentCount> t_in_ns_{};
   std::array<bool, kSegmentCount> have_{};
+  std::array<bool, kSegmentCount> dead_{};
   std::array<uint32_t, kSegmentCount> in_flags_{};
   int64_t t_newest_ns_ = 0;
   int64_t t_prev_solve_ns_ = 0;

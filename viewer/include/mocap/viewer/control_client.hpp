@@ -1,6 +1,7 @@
-// The viewer's only link to the daemon's control socket: one JSON request line, one JSON reply
-// line, over the Unix socket at $XDG_RUNTIME_DIR/mocapd.sock. Isolated here so the viewer
-// follows the daemon's control protocol (docs/daemon.md) by changing this file only.
+// The viewer's only link to the daemon's control socket: one text request line ("calibrate
+// npose", "reset-heading"), one JSON reply line ({"ok":true,...} / {"ok":false,"error":...}),
+// over the Unix socket at $XDG_RUNTIME_DIR/mocapd.sock (mocap/daemon/control.hpp defines the
+// protocol). Isolated here so the viewer links only core and skeleton, not the daemon.
 #pragma once
 
 #include <string>

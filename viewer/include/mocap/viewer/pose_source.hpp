@@ -26,6 +26,9 @@ class PoseSource {
   virtual bool seekable() const { return false; }
   virtual void set_paused(bool) {}
   virtual void seek_by(double /*dt_s*/) {}
+  /// Body proportions the poses were made with (a file's own skeleton), or nullptr to use the
+  /// viewer's (--body-height).
+  virtual const BodyDimensions* dimensions() const { return nullptr; }
 };
 
 /// Fills a PoseFrame's earth orientations and joint positions from joint rotations

@@ -20,7 +20,7 @@ class ShmSource final : public PoseSource {
   std::string name_;
   std::unique_ptr<PostureReader> reader_;
   std::string error_;
-  double next_try_s_ = 0;
+  double next_try_s_ = 0, last_change_s_ = 0;
   uint64_t last_sequence_ = 0;
   bool paused_ = false;
 };

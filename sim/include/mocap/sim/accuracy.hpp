@@ -1,0 +1,59 @@
+// End-to-end tracking accuracy against the virtual performer's ground truth: sensor model ->
+// AttitudeFilter per sensor -> N-pose calibration (Calibrator) -> Skeleton (FK + root motion),
+// compared frame by frame with the truth. Used by `mocap bench accuracy` and the regression test.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/sim/sensor_model.hpp"
+
+namespace mocap::sim {
+
+struct AccuracyOptions {
+  std::string motion = "walk";       ///< make_motion() name
+  std::string disturbance = "none";  ///< disturbance_preset() name
+  uint64_t seed = 1;
+  double rate_hz = 100;
+  double height_m = 1.75;
+  SensorModelParams sensor;  ///< default: consumer MEMS errors
+  /// Calibration capture: starts this long after the calibration stand begins (filters settle)
+  /// and lasts capture_s (must end inside the stand).
+  double settle_s = 0.8;
+  double capture_s = 2.0;
+};
+
+struct AccuracyResult {
+  std::string motion, disturbance;
+  bool calibrated = false;
+  std::string calibration_message;
+  int frames = 0;          ///< evaluated frames (after calibration)
+  double evaluated_s = 0;  ///< evaluated duration
+  /// RMS of the rotation angle between estimated and true joint rotation, per joint (indexed
+  /// by child segment; [0] unused), degrees.
+  std::array<double, kSegmentCount> joint_rmse_deg{};
+  /// RMS of the rotation angle between estimated and true earth orientation, per segment.
+  std::array<double, kSegmentCount> segment_rmse_deg{};
+  double hinge_max_rmse_deg = 0;      ///< worst elbow/knee
+  double three_dof_max_rmse_deg = 0;  ///< worst 3-DOF joint whose parent and child carry sensors
+  double inferred_max_rmse_deg = 0;   ///< worst joint touching the sensorless neck
+  double segment_mean_rmse_deg = 0;   ///< mean over segments with sensors
+  double root_drift_m = 0;            ///< horizontal pelvis error at the end
+  double root_max_error_m = 0;        ///< largest horizontal pelvis error during the motion
+  double distance_walked_m = 0;       ///< true horizontal pelvis path length
+  /// root_drift_m / distance_walked_m (0 when less than 1 m was walked).
+  double root_drift_fraction = 0;
+};
+
+/// Joints whose both segments carry sensors and are 3-DOF (waist, shoulders, wrists, hips,
+/// ankles); hinges are the elbows and knees; the two neck joints involve the sensorless neck.
+bool is_measured_three_dof_joint(Segment child);
+bool is_inferred_joint(Segment child);
+
+/// Runs the motion once (no loop) through the whole pipeline. Throws std::invalid_argument for
+/// unknown motion or disturbance names.
+AccuracyResult run_accuracy(const AccuracyOptions& options);
+
+}  // namespace mocap::sim

@@ -1,0 +1,155 @@
+// End-to-end accuracy run: virtual performer through filter, calibration and skeleton.
+#include "mocap/sim/accuracy.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "mocap/filter/attitude_filter.hpp"
+#include "mocap/sim/performer.hpp"
+#include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/joint_limits.hpp"
+#include "mocap/skeleton/pose_frame.hpp"
+#include "mocap/skeleton/skeleton.hpp"
+
+namespace mocap::sim {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+
+double angle_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+  return 2 * std::acos(std::min(1.0, std::abs(a.normalized().dot(b.normalized())))) * kRadToDeg;
+}
+
+RigMapping performer_rig() {
+  RigMapping rig = RigMapping::none();
+  for (int s = 0; s < kSegmentCount; ++s)
+    rig.sensor_for_segment[s] = Performer::sensor_of(static_cast<Segment>(s));
+  return rig;
+}
+
+}  // namespace
+
+bool is_inferred_joint(Segment child) {
+  return child == Segment::neck || child == Segment::head;
+}
+
+bool is_measured_three_dof_joint(Segment child) {
+  return child != Segment::pelvis && !is_hinge(child) && !is_inferred_joint(child);
+}
+
+AccuracyResult run_accuracy(const AccuracyOptions& o) {
+  PerformerParams pp;
+  pp.seed = o.seed;
+  pp.rate_hz = o.rate_hz;
+  pp.height_m = o.height_m;
+  pp.motion = o.motion;
+  pp.loop = false;
+  pp.sensor = o.sensor;
+  pp.field.dipoles = disturbance_preset(o.disturbance, o.height_m);
+  Performer perf(pp);
+
+  AccuracyResult r;
+  r.motion = o.motion;
+  r.disturbance = o.disturbance;
+
+  const RigMapping rig = performer_rig();
+  std::vector<AttitudeFilter> filters(Performer::kSensorCount);
+  CalibratorOptions copt;
+  copt.capture_s = o.capture_s;
+  copt.heading = HeadingSource::pelvis_sensor;
+  copt.heading_axis_sensor = pelvis_forward_axis_sensor();
+  Calibrator calibrator(rig, copt);
+  Skeleton skeleton(BodyModel(perf.dims()), default_joint_limits(), rig);
+
+  const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
+  const double capture_start_s = calib_begin_s + o.settle_s;
+  if (capture_start_s + o.capture_s > calib_end_s + 1e-9)
+    throw std::invalid_argument("accuracy: calibration capture does not fit in the N-pose stand");
+  const auto to_ns = [](double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e9)); };
+  calibrator.start(CalibrationPose::npose, to_ns(capture_start_s));
+
+  const double frame_s = 1.0 / o.rate_hz;
+  const double end_s = perf.track().period_s();
+  std::vector<ImuSample> samples;
+  samples.reserve(4 * Performer::kSensorCount);
+  PoseFrame frame;
+  TruthFrame truth;
+  std::array<double, kSegmentCount> joint_sq{}, seg_sq{};
+  Eigen::Vector3d prev_true_root = Eigen::Vector3d::Zero();
+  bool evaluating = false;
+
+  for (int k = 1; k * frame_s <= end_s + 1e-9; ++k) {
+    const int64_t t_ns = to_ns(k * frame_s);
+    samples.clear();
+    perf.step_to(t_ns, samples);
+    for (const ImuSample& s : samples) {
+      AttitudeFilter& f = filters[s.sensor_id];
+      f.update(s);
+      const int seg = index(Performer::sensor_segment(s.sensor_id));
+      if (calibrator.capturing()) {
+        calibrator.add_sample(seg, f.q_earth_sensor(), s.t_host_ns, &s.acc_m_s2);
+      } else if (r.calibrated) {
+        uint32_t flags = f.at_rest() ? uint32_t{kSegAtRest} : 0u;
+        if (f.mag_disturbed()) flags |= kSegMagDisturbed;
+        skeleton.set_sensor_orientation(seg, f.q_earth_sensor(), s.t_host_ns, flags);
+      }
+    }
+    if (calibrator.capturing() && calibrator.done(t_ns)) {
+      const CalibrationResult cr = calibrator.finish();
+      r.calibration_message = cr.message;
+      if (!cr.ok()) return r;
+      r.calibrated = true;
+      skeleton.set_calibration(cr.calibration);
+      perf.truth_at(k * frame_s, truth);
+      skeleton.root_motion().reset(truth.p_earth_segment_m[0]);
+      prev_true_root = truth.p_earth_segment_m[0];
+      continue;
+    }
+    if (!r.calibrated) continue;
+    if (!evaluating) {
+      // Every sensor must have delivered an orientation since calibration.
+      evaluating = true;
+      continue;
+    }
+    skeleton.solve(frame);
+    perf.truth_at(k * frame_s, truth);
+    for (int s = 0; s < kSegmentCount; ++s) {
+      const double e_seg = angle_deg(skeleton.q_earth_segment()[s], truth.q_earth_segment[s]);
+      seg_sq[s] += e_seg * e_seg;
+      if (s > 0) {
+        const double e = angle_deg(skeleton.q_parent_segment()[s], truth.q_parent_segment[s]);
+        joint_sq[s] += e * e;
+      }
+    }
+    const Eigen::Vector3d d = skeleton.p_earth_segment_m()[0] - truth.p_earth_segment_m[0];
+    r.root_drift_m = d.head<2>().norm();
+    r.root_max_error_m = std::max(r.root_max_error_m, r.root_drift_m);
+    r.distance_walked_m += (truth.p_earth_segment_m[0] - prev_true_root).head<2>().norm();
+    prev_true_root = truth.p_earth_segment_m[0];
+    ++r.frames;
+  }
+  if (r.frames == 0) return r;
+  r.evaluated_s = r.frames * frame_s;
+  double seg_sum = 0;
+  int seg_n = 0;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    const Segment seg = static_cast<Segment>(s);
+    r.segment_rmse_deg[s] = std::sqrt(seg_sq[s] / r.frames);
+    if (Performer::sensor_of(seg) >= 0) {
+      seg_sum += r.segment_rmse_deg[s];
+      ++seg_n;
+    }
+    if (s == 0) continue;
+    r.joint_rmse_deg[s] = std::sqrt(joint_sq[s] / r.frames);
+    double& worst = is_hinge(seg)                      ? r.hinge_max_rmse_deg
+                    : is_measured_three_dof_joint(seg) ? r.three_dof_max_rmse_deg
+                                                       : r.inferred_max_rmse_deg;
+    worst = std::max(worst, r.joint_rmse_deg[s]);
+  }
+  r.segment_mean_rmse_deg = seg_sum / seg_n;
+  r.root_drift_fraction = r.distance_walked_m >= 1.0 ? r.root_drift_m / r.distance_walked_m : 0.0;
+  return r;
+}
+
+}  // namespace mocap::sim
