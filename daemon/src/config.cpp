@@ -403,6 +403,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
       j.boolean("enabled", c.outputs.json.enabled);
       j.str("bind", c.outputs.json.bind);
       j.integer("port", c.outputs.json.port, 0, 65535);
+      j.integer("max_clients", c.outputs.json.max_clients, 1, 1000);
       j.finish();
       if (!valid_ipv4(c.outputs.json.bind))
         ctx.add(outs->get("json") ? outs->get_as<toml::table>("json")->get("bind") : nullptr,
@@ -627,7 +628,8 @@ std::string config_to_toml(const Config& c) {
   toml::table outs;
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
                                   {"bind", c.outputs.json.bind},
-                                  {"port", c.outputs.json.port}});
+                                  {"port", c.outputs.json.port},
+                                  {"max_clients", c.outputs.json.max_clients}});
   outs.insert("vmc", toml::table{{"enabled", c.outputs.vmc.enabled},
                                  {"host", c.outputs.vmc.host},
                                  {"port", c.outputs.vmc.port}});

@@ -219,6 +219,11 @@ std::string Daemon::status_json() const {
     e["age_ms"] = std::round(s.last_age_ms * 10) / 10;
     e["drops"] = s.drops;
     e["errors"] = s.errors;
+    if (i < devices_.size()) {  // device i carries sensor i (one sensor per configured device)
+      const DeviceStats ds = devices_[i]->stats();
+      e["clock_resets"] = ds.decoder.clock_resets;  // device clock jumps/restarts detected
+      e["reconnects"] = ds.reconnects;
+    }
     e["at_rest"] = f.at_rest;
     e["mag_disturbed"] = f.mag_disturbed;
     e["calibrated"] = f.calibrated;

@@ -26,6 +26,7 @@ class JsonSink final : public FrameSink {
     PoseJsonServer::Options o;
     o.bind_address = c.bind;
     o.port = static_cast<uint16_t>(c.port);
+    o.max_clients = c.max_clients;
     std::string err;
     if (!server_.start(o, &err)) throw std::runtime_error("outputs.json: " + err);
     log.info("pose JSON stream on %s:%u", c.bind.c_str(), server_.port());

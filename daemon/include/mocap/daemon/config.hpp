@@ -60,6 +60,7 @@ struct JsonOutputConfig {
   bool enabled = true;
   std::string bind = "127.0.0.1";
   int port = 7301;
+  int max_clients = 32;  ///< further connections are closed at once
 };
 
 struct VmcOutputConfig {

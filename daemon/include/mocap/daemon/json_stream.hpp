@@ -67,7 +67,10 @@ class PoseJsonServer {
     std::size_t len = 0;
     char data[kPoseJsonMaxLine];
   };
-  static constexpr std::size_t kSlots = 8;
+  // Frames the I/O thread may fall behind before publish() drops one for every client: 64
+  // frames (0.5 s at 120 Hz) ride out scheduling stalls of a loaded machine (8 did not: see
+  // tests/reliability/test_clients.cpp).
+  static constexpr std::size_t kSlots = 64;
   struct Client;
   struct Counters {
     std::atomic<uint64_t> published{0}, dropped{0}, skipped{0}, connected{0}, accepted{0},
