@@ -1,10 +1,13 @@
 // The demo's simulated sensors: Performer -> protocol encoder -> pty (device path), or
-// Performer -> pipeline (direct path), on one thread paced by the wall clock.
+// Performer -> pipeline (direct path), on one thread paced by the wall clock. The demo also
+// requests an N-pose calibration (as `mocapctl calibrate npose` does) during each of the
+// performer's N-pose stands, so the avatar calibrates itself at start and on every loop.
 #include "mocap/daemon/demo.hpp"
 
 #include <poll.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <thread>
@@ -13,6 +16,7 @@
 #include "mocap/core/time.hpp"
 #include "mocap/drivers/sim_encoder.hpp"
 #include "mocap/sim/performer.hpp"
+#include "mocap/sim/sensor_model.hpp"
 
 namespace mocap::daemon {
 
@@ -50,6 +54,7 @@ class DemoService final : public Service {
     }
     samples_.reserve(4096);
     bytes_.reserve(1 << 16);
+    plan_calibration(cfg);
   }
   ~DemoService() override { stop(); }
 
@@ -92,10 +97,43 @@ class DemoService final : public Service {
         if (!bytes_.empty() && !ptys_[s.sensor_id]->write(bytes_)) ++overruns_;
       }
       if (!direct_) answer_host_commands(host_in, sizeof host_in);
+      maybe_request_calibration(now);
     }
     if (overruns_)
       log_.warn("demo: %llu writes did not fit a pty (nobody reading)",
                 static_cast<unsigned long long>(overruns_));
+  }
+
+  // The performer's belt-clip pelvis sensor gives the heading axis (docs/sim.md). The capture
+  // ends kCalibMarginS before the stand does; the countdown is shortened if the first stand
+  // cannot hold countdown + capture after the filters have had kCalibSettleS to converge.
+  void plan_calibration(Config& cfg) {
+    const Eigen::Vector3d axis = sim::pelvis_forward_axis_sensor();
+    cfg.calibration.heading_axis_sensor = {axis.x(), axis.y(), axis.z()};
+    const auto [begin_s, end_s] = performer_->calibration_window_s();
+    period_s_ = performer_->track().period_s();
+    const double capture_start_s = end_s - kCalibMarginS - cfg.calibration.capture_s;
+    if (capture_start_s < begin_s + kCalibSettleS) {
+      log_.warn(
+          "demo: the performer's %.1f s N-pose stand is too short for a %.1f s capture; "
+          "no automatic calibration",
+          end_s - begin_s, cfg.calibration.capture_s);
+      return;
+    }
+    const double countdown_s =
+        std::min(cfg.calibration.countdown_s, capture_start_s - begin_s - kCalibSettleS);
+    cfg.calibration.countdown_s = countdown_s;
+    calib_request_s_ = capture_start_s - countdown_s;
+  }
+
+  // Requests a calibration once per loop when the performer reaches calib_request_s_.
+  void maybe_request_calibration(int64_t now_ns) {
+    if (calib_request_s_ < 0 || period_s_ <= 0) return;
+    const double t_s = static_cast<double>(now_ns - params_.t0_ns) * 1e-9;
+    const double loop = std::floor(t_s / period_s_);
+    if (loop < next_calib_loop_ || t_s - loop * period_s_ < calib_request_s_) return;
+    next_calib_loop_ = loop + 1;
+    pipeline_->calibrate(CalibrationPose::npose);
   }
 
   // Drivers may configure their device (rate, outputs): let each encoder answer.
@@ -109,8 +147,14 @@ class DemoService final : public Service {
     }
   }
 
+  static constexpr double kCalibSettleS = 1.0;  // filter convergence before a capture
+  static constexpr double kCalibMarginS = 0.3;  // capture ends this long before the stand does
+
   Logger log_;
   bool direct_;
+  double period_s_ = 0;
+  double calib_request_s_ = -1;  // performer time within a loop; < 0: no automatic calibration
+  double next_calib_loop_ = 0;
   sim::PerformerParams params_;
   std::unique_ptr<sim::Performer> performer_;
   std::vector<std::unique_ptr<ProtocolEncoder>> encoders_;

@@ -32,6 +32,9 @@ SkeletonOptions skeleton_options(const Config& cfg) {
 CalibratorOptions calibrator_options(const Config& cfg) {
   CalibratorOptions o;
   o.capture_s = cfg.calibration.capture_s;
+  o.heading = HeadingSource::pelvis_sensor;
+  const auto& a = cfg.calibration.heading_axis_sensor;
+  o.heading_axis_sensor = Eigen::Vector3d(a[0], a[1], a[2]);
   return o;
 }
 

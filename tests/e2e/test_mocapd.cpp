@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -291,4 +292,57 @@ TEST(Golden, RecordedSessionsReplayToExpectedPoses) {
     ++checked;
   }
   EXPECT_GE(checked, 1);
+}
+
+// The demo calibrates itself during the performer's N-pose stand (as `mocapctl calibrate npose`
+// would), after which the streamed avatar stands upright: head above pelvis, feet below it near
+// the floor, pelvis upright.
+TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
+  const fs::path dir = fs::temp_directory_path() / ("mocap-e2e-cal-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string sock = (dir / "ctl.sock").string();
+  const uint16_t port = free_port();
+  const pid_t d = spawn({kBin + "mocapd", "--demo", "--set", "daemon.control_socket=" + sock,
+                         "--set", "outputs.json.port=" + std::to_string(port), "--set",
+                         "outputs.posture.shm_name=/mocap-e2e-cal-" + std::to_string(getpid()),
+                         "--log-level", "info"},
+                        (dir / "mocapd.log").string());
+  nlohmann::json st;
+  bool calibrated = false;
+  for (int i = 0; i < 150 && !calibrated; ++i) {
+    std::this_thread::sleep_for(100ms);
+    std::string out;
+    if (run({kBin + "mocapctl", "--socket", sock, "status", "--json"}, &out) != 0) continue;
+    try {
+      st = nlohmann::json::parse(out);
+      calibrated = st["calibrated"].get<bool>();
+    } catch (const std::exception&) {
+    }
+  }
+  ASSERT_TRUE(calibrated) << st.dump() << slurp((dir / "mocapd.log.err").string());
+  for (const auto& s : st["sensors"])
+    EXPECT_TRUE(s["calibrated"].get<bool>()) << s.dump();
+
+  auto lines = read_lines(port, 60);
+  ASSERT_EQ(lines.size(), 60u);
+  for (const auto& l : lines) {
+    std::map<std::string, nlohmann::json> seg;
+    for (const auto& s : l["segments"])
+      seg[s["name"].get<std::string>()] = s;
+    const auto z = [&](const char* n) { return seg.at(n)["p"][2].get<double>(); };
+    EXPECT_GT(z("head") - z("pelvis"), 0.35) << l.dump();
+    for (const char* foot : {"foot_l", "foot_r"}) {
+      EXPECT_LT(z(foot) - z("pelvis"), -0.6) << l.dump();
+      EXPECT_LT(z(foot), 0.25) << l.dump();
+      EXPECT_GT(z(foot), -0.1) << l.dump();
+    }
+    // Pelvis up axis (third column of its rotation) within 30 degrees of earth up.
+    const auto& q = seg.at("pelvis")["q"];
+    const double w = q[0], x = q[1], y = q[2], zq = q[3];
+    const double up_z = 1 - 2 * (x * x + y * y);
+    EXPECT_GT(up_z, std::cos(30 * 3.14159265 / 180)) << q.dump() << " w=" << w << zq;
+  }
+  kill(d, SIGTERM);
+  EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  fs::remove_all(dir);
 }

@@ -33,20 +33,22 @@ TEST(Accuracy, WalkJointAnglesAndRootDrift) {
   const AccuracyResult r = run_accuracy(o);
   ASSERT_TRUE(r.calibrated) << r.calibration_message;
   EXPECT_GT(r.distance_walked_m, 5.0);
-  EXPECT_LE(r.root_drift_fraction, 0.05);  // target (measured 1.8 %)
-  // Measured 7.9 / 10.6 deg (seed 1): target missed, regression guard only.
-  EXPECT_LE(r.hinge_max_rmse_deg, 10.0);
-  EXPECT_LE(r.three_dof_max_rmse_deg, 13.0);
+  EXPECT_LE(r.root_drift_fraction, 0.05);  // target (measured 3.2 %)
+  // Measured 2.40 / 2.20 deg (seed 1): 3-DOF meets its 3 deg target, the knee misses 2 deg.
+  EXPECT_LE(r.hinge_max_rmse_deg, 3.0);
+  EXPECT_LE(r.three_dof_max_rmse_deg, 3.0);
 }
 
 TEST(Accuracy, IdealSensorsIsolateThePipeline) {
   AccuracyOptions o;
   o.sensor = SensorModelParams::ideal();
-  for (const char* m : {"squat", "arm_raise"}) {
+  // The walk guards the accelerometer model: instantaneous accelerations sampled at 100 Hz
+  // aliased foot-contact impulses into a bias that tilted the filters (7.6 / 10.3 deg here).
+  for (const char* m : {"squat", "arm_raise", "walk"}) {
     o.motion = m;
     const AccuracyResult r = run_accuracy(o);
     ASSERT_TRUE(r.calibrated) << r.calibration_message;
-    EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << m;  // target (measured ~0.4)
+    EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << m;  // target (measured <= 0.95)
     EXPECT_LE(r.three_dof_max_rmse_deg, 3.0) << m;
   }
 }

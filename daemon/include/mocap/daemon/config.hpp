@@ -3,6 +3,7 @@
 // problem as "file:line:column: key: message", so the daemon never starts half-configured.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <map>
 #include <optional>
@@ -48,6 +49,10 @@ struct CalibrationConfig {
   double countdown_s = 3.0;    ///< seconds from the command to the capture
   double capture_s = 1.0;      ///< seconds averaged during the capture
   std::string file;            ///< saved calibration loaded at start, written after each one
+  /// Body forward (+x) in the pelvis sensor's frame: the heading axis of a calibration. Not a
+  /// file key: the default suits a pelvis sensor worn with +x forward; the demo sets its
+  /// performer's belt-clip axis.
+  std::array<double, 3> heading_axis_sensor{1.0, 0.0, 0.0};
 };
 
 struct PipelineConfig {
