@@ -1,5 +1,6 @@
 // BVH writer: our skeleton as standard bones, streaming frames, frame count patched on close.
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -106,13 +107,28 @@ void BvhWriter::write_frame(const PoseFrame& fr) {
   const Eigen::Quaterniond ci = c.conjugate();
   const auto& p = fr.p_earth_segment_m[0];
   const Eigen::Vector3d root = c * Eigen::Vector3d(p[0], p[1], p[2]) * opt_.units_per_m;
-  std::fprintf(f_, "%.5f %.5f %.5f", root.x(), root.y(), root.z());
+  // One line per frame, formatted with std::to_chars (same digits as printf "%.Nf", several
+  // times faster, which dominates long offline exports) and written with a single fwrite.
+  char line[(kSegmentCount * 3 + 3) * 24 + 8];  // 51 values of at most 24 characters
+  char* out = line;
+  auto put = [&](double v, int precision, bool space) {
+    if (space) *out++ = ' ';
+    // A value too long for its 24-character share (|v| >= 1e15) is not a body pose.
+    const auto r = std::to_chars(out, out + 23, v, std::chars_format::fixed, precision);
+    if (r.ec != std::errc{}) throw std::runtime_error(path_ + ": value out of range for BVH");
+    out = r.ptr;
+  };
+  put(root.x(), 5, false);
+  put(root.y(), 5, true);
+  put(root.z(), 5, true);
   for (int s = 0; s < kSegmentCount; ++s) {
     const Eigen::Quaterniond q = from_wxyz(s == 0 ? fr.q_earth_segment[0] : fr.q_parent_segment[s]);
     const Eigen::Vector3d e = zxy_degrees_from_rotation(c * q.normalized() * ci);
-    std::fprintf(f_, " %.6f %.6f %.6f", e[0], e[1], e[2]);
+    for (int k = 0; k < 3; ++k)
+      put(e[k], 6, true);
   }
-  std::fputc('\n', f_);
+  *out++ = '\n';
+  std::fwrite(line, 1, static_cast<std::size_t>(out - line), f_);
   if (std::ferror(f_)) throw std::runtime_error(path_ + ": write failed");
   ++frames_;
 }
