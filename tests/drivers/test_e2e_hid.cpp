@@ -94,12 +94,12 @@ TEST(PlaystationReports, DropsCountedFromTimestamps) {
   int withheld = 0;
   for (int i = 0; i < 500; ++i) {
     std::vector<uint8_t> r;
-    enc->encode(motion->at(i * 4'000'000), r);
+    enc->encode(motion->at(int64_t{i} * 4'000'000), r);
     if (i % 17 == 5) {
       ++withheld;
       continue;
     }
-    dec->feed(r, 1'000'000'000 + i * 4'000'000, sink);
+    dec->feed(r, 1'000'000'000 + int64_t{i} * 4'000'000, sink);
   }
   EXPECT_EQ(dec->stats().dropped_samples, static_cast<uint64_t>(withheld));
   EXPECT_EQ(sink.samples.size(), 500u - withheld);
