@@ -2,6 +2,7 @@
 // file:line:column errors, unknown keys rejected with the nearest valid name, --set overrides,
 // and the effective configuration printed back as TOML.
 #include "mocap/daemon/config.hpp"
+#include "mocap/core/text_check.hpp"
 
 #include <arpa/inet.h>
 #include <unistd.h>
@@ -516,6 +517,8 @@ void apply_override(toml::table& root, const std::string& kv, Ctx& ctx) {
   // Parse VALUE as TOML; a bare word becomes a string.
   toml::table parsed;
   const std::string src = "--set " + key;
+  if (const auto bad = text_problem(value))
+    return ctx.add(nullptr, key, "--set: bad value: " + bad->what);
   try {
     parsed = toml::parse("v = " + value, src);
   } catch (const toml::parse_error&) {
@@ -565,6 +568,15 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
                                    const ConfigValidators* validators) {
   Ctx ctx{std::string(source_name), errors, validators};
   toml::table root;
+  if (const auto bad = text_problem(toml_text)) {
+    ConfigError err;
+    err.file = std::string(source_name);
+    err.line = static_cast<int>(bad->line);
+    err.column = static_cast<int>(bad->column);
+    err.message = bad->what;
+    errors.errors.push_back(std::move(err));
+    return std::nullopt;
+  }
   try {
     root = toml::parse(toml_text, source_name);
   } catch (const toml::parse_error& e) {

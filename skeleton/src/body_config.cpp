@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "mocap/core/text_check.hpp"
 #include "mocap/skeleton/body_model.hpp"
 
 namespace mocap {
@@ -39,8 +40,8 @@ Eigen::Vector3d read_vec3(std::string_view source, const toml::node& n, std::str
 
 BodyModelConfig parse_body_config(std::string_view text, std::string_view source) {
   // TOML forbids raw NUL; toml++ 3.3 asserts on some NUL placements, so refuse them first.
-  if (const size_t nul = text.find('\0'); nul != std::string_view::npos)
-    throw std::runtime_error(std::string(source) + ": NUL byte at offset " + std::to_string(nul));
+  if (const auto bad = text_problem(text))
+    throw std::runtime_error(std::string(source) + ": " + bad->to_string());
   toml::table tbl;
   try {
     tbl = toml::parse(text, source);

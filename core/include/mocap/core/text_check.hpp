@@ -1,0 +1,25 @@
+// Checks text before it reaches a parser that assumes well-formed input (toml++ 3.3 has
+// undefined behaviour on some malformed UTF-8): rejects NUL bytes and invalid UTF-8, naming
+// the line and column of the first bad byte.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace mocap {
+
+struct TextProblem {
+  std::size_t line = 0, column = 0;  ///< 1-based position of the first bad byte
+  std::string what;                  ///< e.g. "invalid UTF-8 continuation byte"
+  /// "line L, column C: what"
+  std::string to_string() const {
+    return "line " + std::to_string(line) + ", column " + std::to_string(column) + ": " + what;
+  }
+};
+
+/// The first NUL byte or invalid UTF-8 sequence (overlong, surrogate, beyond U+10FFFF,
+/// truncated), or nullopt if the text is clean.
+std::optional<TextProblem> text_problem(std::string_view text);
+
+}  // namespace mocap
