@@ -8,7 +8,8 @@ namespace {
 
 bool parse(CliArgs& a, std::vector<std::string> v) {
   std::vector<char*> argv{const_cast<char*>("prog")};
-  for (auto& s : v) argv.push_back(s.data());
+  for (auto& s : v)
+    argv.push_back(s.data());
   return a.parse(static_cast<int>(argv.size()), argv.data());
 }
 
@@ -17,8 +18,8 @@ bool parse(CliArgs& a, std::vector<std::string> v) {
 TEST(CliArgs, ParsesOptionsFlagsAndPositionals) {
   CliArgs a;
   a.option("mode", "").flag("verbose", "").multi("set", "");
-  std::vector<std::string> v{"in.csv", "--mode", "6d", "--verbose", "--set=a=1", "--set", "b=2",
-                             "out.csv"};
+  std::vector<std::string> v{"in.csv",    "--mode", "6d",  "--verbose",
+                             "--set=a=1", "--set",  "b=2", "out.csv"};
   ASSERT_TRUE(parse(a, v)) << a.error();
   EXPECT_EQ(a.get("mode").value(), "6d");
   EXPECT_TRUE(a.has("verbose"));

@@ -24,7 +24,8 @@ TEST(Segments, NamesRoundTrip) {
 
 TEST(Segments, ElbowsAndKneesAreHinges) {
   int hinges = 0;
-  for (int i = 0; i < kSegmentCount; ++i) hinges += is_hinge(static_cast<Segment>(i));
+  for (int i = 0; i < kSegmentCount; ++i)
+    hinges += is_hinge(static_cast<Segment>(i));
   EXPECT_EQ(hinges, 4);
   EXPECT_TRUE(is_hinge(Segment::shank_r));
   EXPECT_FALSE(is_hinge(Segment::upper_arm_l));

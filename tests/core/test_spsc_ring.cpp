@@ -13,7 +13,8 @@ TEST(SpscRing, FifoOrderAndFullRing) {
   SpscRing<int, 4> ring;
   int out = 0;
   EXPECT_FALSE(ring.try_pop(out));
-  for (int i = 0; i < 4; ++i) EXPECT_TRUE(ring.try_push(i));
+  for (int i = 0; i < 4; ++i)
+    EXPECT_TRUE(ring.try_push(i));
   EXPECT_FALSE(ring.try_push(99)) << "a full ring must refuse, not overwrite";
   EXPECT_EQ(ring.size(), 4u);
   for (int i = 0; i < 4; ++i) {
@@ -32,7 +33,8 @@ TEST(SpscRing, TwoThreadsDeliverEverySampleInOrder) {
     for (uint32_t i = 0; i < kCount; ++i) {
       s.seq = i;
       s.gyr_rad_s.x() = i * 0.5;
-      while (!ring->try_push(s)) std::this_thread::yield();
+      while (!ring->try_push(s))
+        std::this_thread::yield();
       wake.notify();
     }
   });

@@ -1,5 +1,6 @@
 // The IMU sample: what every driver produces and every later stage consumes. SI units, sensor
-// frame, host-monotonic timestamps. Plain value type (no heap members) so it can cross lock-free queues.
+// frame, host-monotonic timestamps. Plain value type (no heap members) so it can cross lock-free
+// queues.
 #pragma once
 
 #include <Eigen/Core>

@@ -52,11 +52,26 @@ class Logger {
       sink_->write(l, tag_, buf);
     }
   }
-  template <typename... A> void trace(const char* f, A... a) const { log(LogLevel::trace, f, a...); }
-  template <typename... A> void debug(const char* f, A... a) const { log(LogLevel::debug, f, a...); }
-  template <typename... A> void info(const char* f, A... a) const { log(LogLevel::info, f, a...); }
-  template <typename... A> void warn(const char* f, A... a) const { log(LogLevel::warn, f, a...); }
-  template <typename... A> void error(const char* f, A... a) const { log(LogLevel::error, f, a...); }
+  template <typename... A>
+  void trace(const char* f, A... a) const {
+    log(LogLevel::trace, f, a...);
+  }
+  template <typename... A>
+  void debug(const char* f, A... a) const {
+    log(LogLevel::debug, f, a...);
+  }
+  template <typename... A>
+  void info(const char* f, A... a) const {
+    log(LogLevel::info, f, a...);
+  }
+  template <typename... A>
+  void warn(const char* f, A... a) const {
+    log(LogLevel::warn, f, a...);
+  }
+  template <typename... A>
+  void error(const char* f, A... a) const {
+    log(LogLevel::error, f, a...);
+  }
 
  private:
   LogSink* sink_;

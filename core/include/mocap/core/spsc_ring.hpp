@@ -1,6 +1,7 @@
 // Single-producer / single-consumer lock-free ring: the hand-off from a device reader thread to
-// the pipeline thread. Fixed capacity, storage inline (slots are assigned, never constructed), so nothing is allocated per sample. A push
-// into a full ring fails (the caller counts a drop) instead of blocking the device thread.
+// the pipeline thread. Fixed capacity, storage inline (slots are assigned, never constructed), so
+// nothing is allocated per sample. A push into a full ring fails (the caller counts a drop) instead
+// of blocking the device thread.
 #pragma once
 
 #include <array>

@@ -9,7 +9,11 @@ namespace mocap {
 int64_t monotonic_ns();
 
 /// Seconds to ns and back (double).
-constexpr int64_t s_to_ns(double s) { return static_cast<int64_t>(s * 1e9); }
-constexpr double ns_to_s(int64_t ns) { return static_cast<double>(ns) * 1e-9; }
+constexpr int64_t s_to_ns(double s) {
+  return static_cast<int64_t>(s * 1e9);
+}
+constexpr double ns_to_s(int64_t ns) {
+  return static_cast<double>(ns) * 1e-9;
+}
 
 }  // namespace mocap
