@@ -5,7 +5,7 @@
 
 namespace mocap {
 
-std::optional<TextProblem> text_problem(std::string_view text) {
+std::optional<TextProblem> text_problem(std::string_view text, bool ascii_only) {
   std::size_t line = 1, col = 1;
   auto where = [&](const char* what) { return TextProblem{line, col, what}; };
   for (std::size_t i = 0; i < text.size();) {
@@ -21,6 +21,7 @@ std::optional<TextProblem> text_problem(std::string_view text) {
       ++i;
       continue;
     }
+    if (ascii_only) return where("non-ASCII character (TOML files here must be ASCII)");
     int len = 0;
     uint32_t cp = 0;
     if ((b & 0xE0) == 0xC0) {

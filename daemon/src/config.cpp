@@ -517,7 +517,7 @@ void apply_override(toml::table& root, const std::string& kv, Ctx& ctx) {
   // Parse VALUE as TOML; a bare word becomes a string.
   toml::table parsed;
   const std::string src = "--set " + key;
-  if (const auto bad = text_problem(value))
+  if (const auto bad = text_problem(value, /*ascii_only=*/true))
     return ctx.add(nullptr, key, "--set: bad value: " + bad->what);
   try {
     parsed = toml::parse("v = " + value, src);
@@ -568,7 +568,7 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
                                    const ConfigValidators* validators) {
   Ctx ctx{std::string(source_name), errors, validators};
   toml::table root;
-  if (const auto bad = text_problem(toml_text)) {
+  if (const auto bad = text_problem(toml_text, /*ascii_only=*/true)) {
     ConfigError err;
     err.file = std::string(source_name);
     err.line = static_cast<int>(bad->line);

@@ -40,7 +40,7 @@ Eigen::Vector3d read_vec3(std::string_view source, const toml::node& n, std::str
 
 BodyModelConfig parse_body_config(std::string_view text, std::string_view source) {
   // TOML forbids raw NUL; toml++ 3.3 asserts on some NUL placements, so refuse them first.
-  if (const auto bad = text_problem(text))
+  if (const auto bad = text_problem(text, /*ascii_only=*/true))
     throw std::runtime_error(std::string(source) + ": " + bad->to_string());
   toml::table tbl;
   try {

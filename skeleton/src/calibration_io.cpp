@@ -79,7 +79,7 @@ std::string serialize_calibration(const Calibration& c) {
 
 Calibration parse_calibration(std::string_view text, std::string_view source) {
   // TOML forbids raw NUL; toml++ 3.3 asserts on some NUL placements, so refuse them first.
-  if (const auto bad = text_problem(text))
+  if (const auto bad = text_problem(text, /*ascii_only=*/true))
     throw std::runtime_error(std::string(source) + ": " + bad->to_string());
   toml::table tbl;
   try {

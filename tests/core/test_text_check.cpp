@@ -37,4 +37,14 @@ TEST(TextCheck, FindsTheFirstBadByteWithItsPosition) {
   EXPECT_EQ(text_problem("\n\xFF")->to_string(), "line 2, column 1: invalid UTF-8 lead byte");
 }
 
+TEST(TextCheck, AsciiOnlyRejectsValidNonAscii) {
+  // U+03CF after a value sends toml++ 3.3 into __builtin_unreachable (fuzz finding).
+  const std::string text = "a = 1\nb = 2\xCF\x8F\n";
+  EXPECT_FALSE(text_problem(text));
+  const auto p = text_problem(text, /*ascii_only=*/true);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_EQ(p->line, 2u);
+  EXPECT_EQ(p->column, 6u);
+}
+
 }  // namespace mocap
