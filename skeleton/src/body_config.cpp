@@ -5,19 +5,15 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "mocap/core/text_check.hpp"
 #include "mocap/skeleton/body_model.hpp"
+
+#include "toml_io.hpp"
 
 namespace mocap {
 
 namespace {
 
-[[noreturn]] void fail(std::string_view source, const toml::source_region& r,
-                       const std::string& what) {
-  std::ostringstream os;
-  os << source << ":" << r.begin.line << ":" << r.begin.column << ": " << what;
-  throw std::runtime_error(os.str());
-}
+using skeleton_toml::fail;
 
 Eigen::Vector3d read_vec3(std::string_view source, const toml::node& n, std::string_view key,
                           double limit_m) {
@@ -39,15 +35,7 @@ Eigen::Vector3d read_vec3(std::string_view source, const toml::node& n, std::str
 }  // namespace
 
 BodyModelConfig parse_body_config(std::string_view text, std::string_view source) {
-  // TOML forbids raw NUL; toml++ 3.3 asserts on some NUL placements, so refuse them first.
-  if (const auto bad = text_problem(text, /*ascii_only=*/true))
-    throw std::runtime_error(std::string(source) + ": " + bad->to_string());
-  toml::table tbl;
-  try {
-    tbl = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    fail(source, e.source(), std::string(e.description()));
-  }
+  const toml::table tbl = skeleton_toml::parse(text, source);
   BodyModelConfig cfg;
   for (auto&& [k, v] : tbl) {
     if (k == "height_m") {

@@ -7,21 +7,17 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "mocap/core/text_check.hpp"
 #include "mocap/skeleton/calibration.hpp"
+
+#include "toml_io.hpp"
 
 namespace mocap {
 
 namespace {
 
-constexpr int kCalibrationVersion = 1;
+using skeleton_toml::fail;
 
-[[noreturn]] void fail(std::string_view source, const toml::source_region& r,
-                       const std::string& what) {
-  std::ostringstream os;
-  os << source << ":" << r.begin.line << ":" << r.begin.column << ": " << what;
-  throw std::runtime_error(os.str());
-}
+constexpr int kCalibrationVersion = 1;
 
 std::string quat_text(const Eigen::Quaterniond& q) {
   char buf[160];
@@ -78,15 +74,7 @@ std::string serialize_calibration(const Calibration& c) {
 }
 
 Calibration parse_calibration(std::string_view text, std::string_view source) {
-  // TOML forbids raw NUL; toml++ 3.3 asserts on some NUL placements, so refuse them first.
-  if (const auto bad = text_problem(text, /*ascii_only=*/true))
-    throw std::runtime_error(std::string(source) + ": " + bad->to_string());
-  toml::table tbl;
-  try {
-    tbl = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    fail(source, e.source(), std::string(e.description()));
-  }
+  const toml::table tbl = skeleton_toml::parse(text, source);
   Calibration c;
   bool have_header = false;
   for (auto&& [k, v] : tbl) {

@@ -4,19 +4,15 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "mocap/core/text_check.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
+
+#include "toml_io.hpp"
 
 namespace mocap {
 
 namespace {
 
-[[noreturn]] void fail(std::string_view source, const toml::source_region& r,
-                       const std::string& what) {
-  std::ostringstream os;
-  os << source << ":" << r.begin.line << ":" << r.begin.column << ": " << what;
-  throw std::runtime_error(os.str());
-}
+using skeleton_toml::fail;
 
 int joint_index(std::string_view n) {
   for (int i = 0; i < kSegmentCount; ++i)
@@ -45,15 +41,7 @@ void read_range(std::string_view source, const toml::node& n, std::string_view k
 }  // namespace
 
 JointLimits parse_joint_limits(std::string_view text, std::string_view source) {
-  // TOML forbids raw NUL; toml++ 3.3 asserts on some NUL placements, so refuse them first.
-  if (const auto bad = text_problem(text, /*ascii_only=*/true))
-    throw std::runtime_error(std::string(source) + ": " + bad->to_string());
-  toml::table tbl;
-  try {
-    tbl = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    fail(source, e.source(), std::string(e.description()));
-  }
+  const toml::table tbl = skeleton_toml::parse(text, source);
   JointLimits L = default_joint_limits();
   for (auto&& [k, v] : tbl) {
     if (k != "joint") fail(source, k.source(), "unknown key '" + std::string(k.str()) + "'");
