@@ -50,6 +50,17 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
   j["three_dof_max_rmse_deg"] = r.three_dof_max_rmse_deg;
   j["inferred_neck_max_rmse_deg"] = r.inferred_max_rmse_deg;
   j["segment_mean_rmse_deg"] = r.segment_mean_rmse_deg;
+  nlohmann::json diag;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    if (r.sensor_inclination_rmse_deg[s] == 0 && r.sensor_heading_drift_deg[s] == 0) continue;
+    diag[std::string(kSegmentNames[s])] = {
+        {"npose_mount_yaw_error_deg", r.npose_mount_yaw_error_deg[s]},
+        {"mount_yaw_error_deg", r.mount_yaw_error_deg[s]},
+        {"filter_heading_drift_deg", r.sensor_heading_drift_deg[s]},
+        {"filter_inclination_rmse_deg", r.sensor_inclination_rmse_deg[s]}};
+  }
+  j["sensor_diagnostics"] = diag;
+  j["hinges_identified"] = r.hinges_identified;
   j["root_drift_m"] = r.root_drift_m;
   j["root_max_error_m"] = r.root_max_error_m;
   j["distance_walked_m"] = r.distance_walked_m;
@@ -59,6 +70,36 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
                   {"root_drift_le_5pct",
                    r.distance_walked_m < 1.0 || r.root_drift_fraction <= kRootDriftTarget}};
   return j;
+}
+
+/// Ideal sensors plus the named default error groups (comma list); `bad` gets an unknown name.
+sim::SensorModelParams only_errors(const std::string& list, std::string& bad) {
+  const sim::SensorModelParams d;
+  sim::SensorModelParams p = sim::SensorModelParams::ideal();
+  for (const std::string& g : expand(list, {})) {
+    if (g == "mount") {
+      p.mount_misalignment_deg = d.mount_misalignment_deg;
+    } else if (g == "mag") {
+      p.mag_noise_uT = d.mag_noise_uT;
+      p.mag_hard_iron_sigma_uT = d.mag_hard_iron_sigma_uT;
+      p.mag_scale_sigma = d.mag_scale_sigma;
+    } else if (g == "gyr") {
+      p.gyr_noise_density_dps_rthz = d.gyr_noise_density_dps_rthz;
+      p.gyr_bias_sigma_dps = d.gyr_bias_sigma_dps;
+      p.gyr_bias_walk_dps_rts = d.gyr_bias_walk_dps_rts;
+      p.gyr_scale_sigma = d.gyr_scale_sigma;
+    } else if (g == "acc") {
+      p.acc_noise_density_m_s2_rthz = d.acc_noise_density_m_s2_rthz;
+      p.acc_bias_sigma_m_s2 = d.acc_bias_sigma_m_s2;
+      p.acc_scale_sigma = d.acc_scale_sigma;
+    } else if (g == "timing") {
+      p.jitter_sigma_s = d.jitter_sigma_s;
+      p.drop_probability = d.drop_probability;
+    } else if (!g.empty()) {
+      bad = g;
+    }
+  }
+  return p;
 }
 
 void print_markdown_row(const sim::AccuracyResult& r) {
@@ -86,6 +127,14 @@ int run_accuracy(int argc, char** argv) {
       .option("disturbance", "none|magnet|desk|both, comma list or 'all' (default none,both)")
       .option("seed", "random seed (default 1)")
       .option("rate", "sensor rate in Hz (default 100)")
+      .option("heading", "calibration heading source: pelvis|mean|truth (default pelvis)")
+      .flag(
+          "calibration-moves",
+          "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
+      .flag("no-refine", "N-pose calibration only (no hinge-motion refinement)")
+      .option("sensor-errors",
+              "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
+              "(error breakdown; default all)")
       .flag("ideal", "ideal sensors (no noise, bias, misalignment): isolates the pipeline")
       .flag("markdown", "also print a markdown table on stderr");
   if (!args.parse(argc, argv, 1)) {
@@ -103,7 +152,22 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.seed = static_cast<uint64_t>(seed);
+  const std::string heading = args.get_or("heading", "pelvis");
+  if (heading == "mean")
+    base.heading = HeadingSource::mean_sensors;
+  else if (heading == "truth")
+    base.heading = HeadingSource::explicit_heading;
+  if (args.has("no-refine")) base.hinge_refine.enabled = false;
+  base.calibration_moves = args.has("calibration-moves");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();
+  if (args.has("sensor-errors")) {
+    std::string bad;
+    base.sensor = only_errors(args.get_or("sensor-errors", ""), bad);
+    if (!bad.empty()) {
+      std::fprintf(stderr, "mocap bench accuracy: unknown sensor error group '%s'\n", bad.c_str());
+      return 2;
+    }
+  }
   const auto motions = expand(args.get_or("motion", "all"), all_motions);
   const auto disturbances =
       expand(args.get_or("disturbance", "none,both"), {"none", "magnet", "desk", "both"});

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mocap/filter/attitude_filter.hpp"
+#include "mocap/sim/motion.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
@@ -43,7 +44,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   pp.seed = o.seed;
   pp.rate_hz = o.rate_hz;
   pp.height_m = o.height_m;
-  pp.motion = o.motion;
+  pp.motion = o.calibration_moves ? "calibrate+" + o.motion : o.motion;
   pp.loop = false;
   pp.sensor = o.sensor;
   pp.field.dipoles = disturbance_preset(o.disturbance, o.height_m);
@@ -57,10 +58,13 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   std::vector<AttitudeFilter> filters(Performer::kSensorCount);
   CalibratorOptions copt;
   copt.capture_s = o.capture_s;
-  copt.heading = HeadingSource::pelvis_sensor;
+  copt.heading = o.heading;
+  copt.explicit_heading_deg = o.explicit_heading_deg;
   copt.heading_axis_sensor = pelvis_forward_axis_sensor();
   Calibrator calibrator(rig, copt);
-  Skeleton skeleton(BodyModel(perf.dims()), default_joint_limits(), rig);
+  SkeletonOptions sopt;
+  sopt.hinge_refine = o.hinge_refine;
+  Skeleton skeleton(BodyModel(perf.dims()), default_joint_limits(), rig, sopt);
 
   const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
   const double capture_start_s = calib_begin_s + o.settle_s;
@@ -70,6 +74,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   calibrator.start(CalibrationPose::npose, to_ns(capture_start_s));
 
   const double frame_s = 1.0 / o.rate_hz;
+  const double eval_start_s = o.calibration_moves ? calib_end_s + calibration_moves_s() : 0.0;
   const double end_s = perf.track().period_s();
   std::vector<ImuSample> samples;
   samples.reserve(4 * Performer::kSensorCount);
@@ -78,6 +83,13 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   std::array<double, kSegmentCount> joint_sq{}, seg_sq{};
   Eigen::Vector3d prev_true_root = Eigen::Vector3d::Zero();
   bool evaluating = false;
+  Calibration npose_calibration;
+  // Filter heading error at the first evaluated frame, per sensor, and the running sums.
+  std::array<double, Performer::kSensorCount> heading0_deg{}, heading_sq{}, incl_sq{};
+  const auto yaw_deg = [](const Eigen::Quaterniond& q) {
+    const Eigen::Vector3d x = q * Eigen::Vector3d::UnitX();
+    return std::atan2(x.y(), x.x()) * kRadToDeg;
+  };
 
   for (int k = 1; k * frame_s <= end_s + 1e-9; ++k) {
     const int64_t t_ns = to_ns(k * frame_s);
@@ -101,12 +113,19 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       if (!cr.ok()) return r;
       r.calibrated = true;
       skeleton.set_calibration(cr.calibration);
+      npose_calibration = cr.calibration;
       perf.truth_at(k * frame_s, truth);
       skeleton.root_motion().reset(truth.p_earth_segment_m[0]);
       prev_true_root = truth.p_earth_segment_m[0];
       continue;
     }
     if (!r.calibrated) continue;
+    if (k * frame_s < eval_start_s) {
+      skeleton.solve(frame);  // the calibration moves: refinement only, not evaluated
+      perf.truth_at(k * frame_s, truth);
+      prev_true_root = truth.p_earth_segment_m[0];
+      continue;
+    }
     if (!evaluating) {
       // Every sensor must have delivered an orientation since calibration.
       evaluating = true;
@@ -128,6 +147,20 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     r.distance_walked_m += (truth.p_earth_segment_m[0] - prev_true_root).head<2>().norm();
     prev_true_root = truth.p_earth_segment_m[0];
     ++r.frames;
+    // The filters' own error (vs the sensor's true orientation): inclination, and the change of
+    // the heading error since the evaluation began (a constant one is absorbed by calibration).
+    for (int id = 0; id < Performer::kSensorCount; ++id) {
+      const Eigen::Quaterniond q_err =
+          (filters[id].q_earth_sensor() *
+           perf.sensor_kinematics(id, k * frame_s).q_earth_sensor.conjugate())
+              .normalized();
+      const double h = yaw_deg(q_err);
+      if (r.frames == 1) heading0_deg[id] = h;
+      const double dh = std::remainder(h - heading0_deg[id], 360.0);
+      heading_sq[id] += dh * dh;
+      const double c = std::clamp((q_err * Eigen::Vector3d::UnitZ()).z(), -1.0, 1.0);
+      incl_sq[id] += std::pow(std::acos(c) * kRadToDeg, 2);
+    }
   }
   if (r.frames == 0) return r;
   r.evaluated_s = r.frames * frame_s;
@@ -148,6 +181,17 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     worst = std::max(worst, r.joint_rmse_deg[s]);
   }
   r.segment_mean_rmse_deg = seg_sum / seg_n;
+  // Calibration diagnostics: the mounting's yaw about the segment's vertical vs the true mount.
+  const Calibration& used = skeleton.calibration();
+  r.hinges_identified = skeleton.hinge_refiner().valid_hinges();
+  for (int id = 0; id < Performer::kSensorCount; ++id) {
+    const int s = index(Performer::sensor_segment(id));
+    const Eigen::Quaterniond& q_seg_sensor = perf.mount(id).q_segment_sensor;
+    r.npose_mount_yaw_error_deg[s] = yaw_deg(q_seg_sensor * npose_calibration.q_sensor_segment[s]);
+    r.mount_yaw_error_deg[s] = yaw_deg(q_seg_sensor * used.q_sensor_segment[s]);
+    r.sensor_heading_drift_deg[s] = std::sqrt(heading_sq[id] / r.frames);
+    r.sensor_inclination_rmse_deg[s] = std::sqrt(incl_sq[id] / r.frames);
+  }
   r.root_drift_fraction = r.distance_walked_m >= 1.0 ? r.root_drift_m / r.distance_walked_m : 0.0;
   return r;
 }

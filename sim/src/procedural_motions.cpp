@@ -64,7 +64,7 @@ void leg(BodyPose& p, bool left, double hip_deg, double knee_deg, double pelvis_
 }
 
 struct Clip {
-  enum Kind { kStand, kWalk, kTurn, kSquat, kArmRaise, kReach } kind;
+  enum Kind { kStand, kWalk, kTurn, kSquat, kArmRaise, kReach, kCalibrationMoves } kind;
   double duration_s;
   double yaw_change_deg = 0;  // heading change over the clip (turn)
 };
@@ -152,6 +152,19 @@ void arm_raise(double t, double d, BodyPose& p) {
   }
 }
 
+/// The calibration moves after the N-pose (calibration_moves_s()): two shallow knee bends with
+/// the elbows curling at the same time, standing in place: the knee and elbow flexion the hinge
+/// refinement of the calibration identifies the segments' axes from.
+void calibration_moves(double t, double d, BodyPose& p) {
+  const double half = d / 2;
+  const double u = bump(std::fmod(t, half) / half);
+  p.q_earth_pelvis = ry(10 * u);
+  leg(p, true, 45 * u, 60 * u, 10 * u);
+  leg(p, false, 45 * u, 60 * u, 10 * u);
+  set(p, Segment::forearm_l, ry(-90 * u));
+  set(p, Segment::forearm_r, ry(-90 * u));
+}
+
 void reach(double t, double d, BodyPose& p) {
   const double half = d / 2;
   const bool right = t < half;
@@ -180,6 +193,8 @@ void clip_pose(const Clip& c, double t, BodyPose& p) {
       return arm_raise(t, c.duration_s, p);
     case Clip::kReach:
       return reach(t, c.duration_s, p);
+    case Clip::kCalibrationMoves:
+      return calibration_moves(t, c.duration_s, p);
   }
 }
 
@@ -226,38 +241,57 @@ std::span<const std::string_view> motion_names() {
 }
 
 std::unique_ptr<Motion> make_motion(std::string_view name) {
-  const Clip calib{Clip::kStand, 3.0}, rest{Clip::kStand, 1.0};
   std::vector<Clip> clips;
+  // A motion after the calibration moves starts from where they end (its own N-pose stand
+  // would be a second calibration stand: dropped).
+  const auto append = [&clips](std::vector<Clip> more) {
+    const bool after_moves = !clips.empty();
+    for (size_t i = after_moves ? 1 : 0; i < more.size(); ++i)
+      clips.push_back(more[i]);
+  };
+  const Clip calib{Clip::kStand, 3.0}, rest{Clip::kStand, 1.0};
+  constexpr std::string_view kPrefix = "calibrate+";
+  if (name.starts_with(kPrefix)) {
+    name.remove_prefix(kPrefix.size());
+    if (name.starts_with(kPrefix) || name == "npose")
+      throw std::invalid_argument("calibrate+ needs a moving motion after it, not '" +
+                                  std::string(name) + "'");
+    clips = {calib, {Clip::kCalibrationMoves, calibration_moves_s() - 1.0}, rest};
+  }
   if (name == "npose") {
-    clips = {{Clip::kStand, 5.0}};
+    append({{Clip::kStand, 5.0}});
   } else if (name == "walk") {
-    clips = {calib, {Clip::kWalk, 8.8}, rest};
+    append({calib, {Clip::kWalk, 8.8}, rest});
   } else if (name == "turn") {
-    clips = {calib, {Clip::kTurn, 4.5, 180}, rest};
+    append({calib, {Clip::kTurn, 4.5, 180}, rest});
   } else if (name == "squat") {
-    clips = {calib, {Clip::kSquat, 6.0}, rest};
+    append({calib, {Clip::kSquat, 6.0}, rest});
   } else if (name == "arm_raise") {
-    clips = {calib, {Clip::kArmRaise, 12.0}, rest};
+    append({calib, {Clip::kArmRaise, 12.0}, rest});
   } else if (name == "reach") {
-    clips = {calib, {Clip::kReach, 6.0}, rest};
+    append({calib, {Clip::kReach, 6.0}, rest});
   } else if (name == "sequence") {
-    clips = {calib,
-             {Clip::kWalk, 6.6},
-             {Clip::kTurn, 3.6, 180},
-             {Clip::kWalk, 6.6},
-             {Clip::kTurn, 3.6, 180},
-             {Clip::kSquat, 6.0},
-             {Clip::kArmRaise, 12.0},
-             {Clip::kReach, 6.0},
-             rest};
+    append({calib,
+            {Clip::kWalk, 6.6},
+            {Clip::kTurn, 3.6, 180},
+            {Clip::kWalk, 6.6},
+            {Clip::kTurn, 3.6, 180},
+            {Clip::kSquat, 6.0},
+            {Clip::kArmRaise, 12.0},
+            {Clip::kReach, 6.0},
+            rest});
   } else {
     std::string valid;
     for (auto n : kNames)
       valid += (valid.empty() ? "" : ", ") + std::string(n);
     throw std::invalid_argument("unknown motion '" + std::string(name) + "' (valid: " + valid +
-                                ")");
+                                ", each optionally prefixed by calibrate+)");
   }
   return std::make_unique<ClipSequence>(std::move(clips));
+}
+
+double calibration_moves_s() {
+  return 5.0;
 }
 
 }  // namespace mocap::sim

@@ -11,7 +11,12 @@ namespace mocap {
 
 Skeleton::Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping rig,
                    SkeletonOptions options)
-    : model_(model), limits_(limits), rig_(rig), opt_(options), root_(model, options.root) {
+    : model_(model),
+      limits_(limits),
+      rig_(rig),
+      opt_(options),
+      refiner_(rig, options.hinge_refine),
+      root_(model, options.root) {
   validate(limits_);
   q_es_.fill(Eigen::Quaterniond::Identity());
   q_earth_.fill(Eigen::Quaterniond::Identity());
@@ -50,16 +55,25 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
   if (t_ns > t_newest_ns_) t_newest_ns_ = t_ns;
 }
 
+void Skeleton::set_calibration(const Calibration& c) {
+  calib_ = calib_base_ = c;
+  refiner_.reset();
+}
+
 void Skeleton::reset_heading(const double* target_heading_deg) {
   std::array<bool, kSegmentCount> have{};
   for (int i = 0; i < kSegmentCount; ++i)
     have[i] = have_[i] && !dead_[i] && rig_.tracked(i);
+  // The reset goes into the base calibration; the hinge yaw offsets (a conjugation, which keeps
+  // an upright segment's heading) stay on top.
   if (target_heading_deg) {
     const double rad = *target_heading_deg * kDegToRad;
-    apply_heading_reset(calib_, q_es_, have, &rad);
+    apply_heading_reset(calib_base_, q_es_, have, &rad);
   } else {
-    apply_heading_reset(calib_, q_es_, have);
+    apply_heading_reset(calib_base_, q_es_, have);
   }
+  calib_ =
+      HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(), refiner_.common_yaw_rad());
 }
 
 void Skeleton::set_sensor_live(int segment, bool live) {
@@ -84,6 +98,23 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
     q_earth_[i] = calib_.segment_from_sensor(i, q_es_[i]);
     flags[i] = kSegTracked | in_flags_[i];
     if (t_now_ns - t_in_ns_[i] > opt_.stale_after_ns) flags[i] |= kSegStale;
+  }
+  // Hinge refinement: feed the fresh segments under the base calibration; re-apply its offsets.
+  if (opt_.hinge_refine.enabled && calib_base_.valid) {
+    std::array<Eigen::Quaterniond, kSegmentCount> q_base;
+    std::array<bool, kSegmentCount> fresh{};
+    for (int i = 0; i < kSegmentCount; ++i) {
+      fresh[i] = live[i] && !(flags[i] & kSegStale);
+      q_base[i] =
+          fresh[i] ? calib_base_.segment_from_sensor(i, q_es_[i]) : Eigen::Quaterniond::Identity();
+    }
+    refiner_.add(q_base, t_in_ns_, fresh, t_now_ns);
+    if (refiner_.update(t_now_ns)) {
+      calib_ = HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(),
+                                       refiner_.common_yaw_rad());
+      for (int i = 0; i < kSegmentCount; ++i)
+        if (live[i]) q_earth_[i] = calib_.segment_from_sensor(i, q_es_[i]);
+    }
   }
   // 2. Segments without (live) sensor, in depth-first order: slerp from the parent towards the
   //    tracked segment further down the chain, or copy the parent.

@@ -9,6 +9,8 @@
 
 #include "mocap/core/segments.hpp"
 #include "mocap/sim/sensor_model.hpp"
+#include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/hinge_calibration.hpp"
 
 namespace mocap::sim {
 
@@ -23,6 +25,14 @@ struct AccuracyOptions {
   /// and lasts capture_s (must end inside the stand).
   double settle_s = 0.8;
   double capture_s = 2.0;
+  /// Body-heading source of the N-pose calibration (experiments: explicit 0 = the truth).
+  HeadingSource heading = HeadingSource::pelvis_sensor;
+  double explicit_heading_deg = 0;
+  /// Hinge-motion refinement of the calibration (on by default, as in the daemon).
+  HingeRefineOptions hinge_refine{};
+  /// The calibration procedure includes the calibration moves (knee bends with elbow curls,
+  /// make_motion("calibrate+<motion>")) after the N-pose; the evaluation starts after them.
+  bool calibration_moves = false;
 };
 
 struct AccuracyResult {
@@ -45,6 +55,14 @@ struct AccuracyResult {
   double distance_walked_m = 0;       ///< true horizontal pelvis path length
   /// root_drift_m / distance_walked_m (0 when less than 1 m was walked).
   double root_drift_fraction = 0;
+  // Diagnostics, per segment with a sensor (degrees):
+  /// Yaw about the segment's vertical between the calibrated and the true sensor mounting: of
+  /// the N-pose calibration, and of the calibration in use at the end (after hinge refinement).
+  std::array<double, kSegmentCount> npose_mount_yaw_error_deg{}, mount_yaw_error_deg{};
+  /// The filter's own errors over the evaluation: RMS change of its heading error since the
+  /// evaluation began (what no calibration can absorb), and RMS inclination error.
+  std::array<double, kSegmentCount> sensor_heading_drift_deg{}, sensor_inclination_rmse_deg{};
+  int hinges_identified = 0;  ///< knees/elbows whose axis the refinement identified
 };
 
 /// Joints whose both segments carry sensors and are 3-DOF (waist, shoulders, wrists, hips,

@@ -46,7 +46,13 @@ std::unique_ptr<Motion> make_bvh_motion(const std::string& path, double lead_in_
 std::span<const std::string_view> motion_names();
 
 /// The built-in motion of that name; throws std::invalid_argument naming the valid names.
+/// "calibrate+<name>" (e.g. "calibrate+squat"): the 3 s N-pose stand, then the calibration
+/// moves (two shallow knee bends with elbow curls, 4 s, then a 1 s stand: calibration_moves_s()
+/// in all), then the motion without its own leading stand.
 std::unique_ptr<Motion> make_motion(std::string_view name);
+
+/// Duration of the calibration moves including their closing 1 s stand, seconds.
+double calibration_moves_s();
 
 /// A motion placed in the world: adds the pelvis translation (feet planted: the weight-bearing
 /// ankle stays fixed on the floor, blended smoothly between feet) and optionally loops forever

@@ -16,6 +16,7 @@
 
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/hinge_calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 #include "mocap/skeleton/rig.hpp"
@@ -36,6 +37,10 @@ struct SkeletonOptions {
   int64_t stale_after_ns = 200'000'000;
   /// Time constant of the per-joint violation average (the drift signal), seconds.
   double violation_tau_s = 2.0;
+  /// Refinement of the calibration's per-segment heading from knee/elbow motion after a
+  /// calibration (hinge_calibration.hpp). Off by default here; the daemon and the accuracy
+  /// benchmark turn it on.
+  HingeRefineOptions hinge_refine{.enabled = false};
 };
 
 class Skeleton {
@@ -43,11 +48,14 @@ class Skeleton {
   Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping rig,
            SkeletonOptions options = {});
 
-  /// Applies a calibration (copies it). Without one, sensors are taken as aligned with their
-  /// segments (q_sensor_segment = identity).
-  void set_calibration(const Calibration& c) { calib_ = c; }
+  /// Applies a calibration (copies it) and restarts the hinge refinement from it. Without one,
+  /// sensors are taken as aligned with their segments (q_sensor_segment = identity).
+  void set_calibration(const Calibration& c);
+  /// The calibration in use: the one set, refined by hinge motion when enabled (save this one).
   const Calibration& calibration() const { return calib_; }
-  void clear_calibration() { calib_ = Calibration{}; }
+  void clear_calibration() { set_calibration(Calibration{}); }
+  /// The hinge refinement's state (yaw offsets found so far, per-hinge estimates).
+  const HingeAxisRefiner& hinge_refiner() const { return refiner_; }
   /// Heading-only reset from the latest sensor orientations (the person stands facing forward):
   /// every segment takes the pelvis's heading, or `target_heading_deg` when given (0 = face +x).
   void reset_heading(const double* target_heading_deg = nullptr);
@@ -90,7 +98,9 @@ class Skeleton {
   JointLimits limits_;
   RigMapping rig_;
   SkeletonOptions opt_;
-  Calibration calib_;
+  Calibration calib_;       ///< in use: calib_base_ refined by the hinge yaw offsets
+  Calibration calib_base_;  ///< as set (plus heading resets)
+  HingeAxisRefiner refiner_;
   RootMotion root_;
 
   // Inputs.

@@ -1,0 +1,120 @@
+// Functional refinement of the sensor-to-segment calibration from hinge-joint motion (knees,
+// elbows): the joint-axis identification of Seel et al. (2014) restricted to the one degree of
+// freedom a still N/T-pose leaves open.
+//
+// A still pose fixes each sensor's mounting up to a rotation about the vertical: the calibration
+// has to assume every sensor's heading agrees with the body heading. When it does not (the
+// heading source is off, e.g. the pelvis sensor's mount is turned by 5 deg, or a filter's
+// heading is off by a hard-iron residual), a calibrated segment frame is yawed by alpha against
+// the true one: q_earth_segment_est = Rz(eps) q_earth_segment Rz(-alpha), and every joint axis
+// is turned by the difference (a knee flexing by 100 deg shows ~alpha * 1.7 deg of false
+// ab/adduction). For a hinge, the angular rates of both segments satisfy
+// |w_parent x j_parent| = |w_child x j_child| (the rates off the axis are the same vector),
+// with j = the flexion axis in each segment frame; rates are taken in the calibrated segment
+// frames, which makes them independent of the earth heading. With j = Rz(phi) x in the
+// horizontal plane of the segment frame, |w x j|^2 is linear in (cos 2phi, sin 2phi), so the
+// squared residuals reduce to running sums (a 4x4 quadratic form per hinge, no buffers), and the
+// two yaw offsets are found by a search over +-max_yaw_deg. Corrected calibration:
+// q_sensor_segment <- q_sensor_segment Rz(alpha), q_correction <- Rz(-alpha) q_correction, so
+// that every refined segment reads Rz(e) q_earth_segment with one common heading error e, which
+// cancels in all joint rotations. Segments without an identified hinge get the mean offset. The
+// mean offset is also -e (the N-pose made eps_i - alpha_i = e for every sensor, and the filters'
+// magnetometer heading errors eps_i scatter around zero), so every segment is turned by it:
+// this corrects the body heading (walking direction) too.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/rig.hpp"
+
+namespace mocap {
+
+struct HingeRefineOptions {
+  bool enabled = true;
+  /// A hinge's estimate is used once the joint has flexed this much in total (sum of |rate| dt
+  /// of the relative rotation): ~1.5 walking strides, one deep knee bend, one elbow curl.
+  double min_travel_deg = 150;
+  double max_yaw_deg = 25;         ///< search range of each segment's yaw offset
+  double update_interval_s = 0.5;  ///< re-estimation period
+  double max_step_s = 0.1;     ///< increments over longer gaps (and rates older than this) unused
+  double min_rate_deg_s = 10;  ///< increments with both segments slower than this are skipped
+};
+
+/// One hinge's identification state (for diagnostics and the daemon's status).
+struct HingeEstimate {
+  bool valid = false;         ///< travel reached and the fit is well-conditioned
+  double travel_deg = 0;      ///< accumulated flexion travel
+  double parent_yaw_deg = 0;  ///< estimated yaw offset of the parent's calibrated frame
+  double child_yaw_deg = 0;   ///< ... and of the child's
+  double rms_residual = 0;    ///< RMS of |w_p x j_p|^2 - |w_c x j_c|^2 relative to its scale
+};
+
+/// The hinges used: knees (thigh-shank) and elbows (upper arm-forearm), flexion about y.
+inline constexpr std::array<Segment, 4> kRefineHingeChildren = {
+    Segment::shank_l, Segment::shank_r, Segment::forearm_l, Segment::forearm_r};
+
+class HingeAxisRefiner {
+ public:
+  explicit HingeAxisRefiner(RigMapping rig, HingeRefineOptions options = {});
+
+  /// Forgets everything (new base calibration).
+  void reset();
+  /// The newest segment orientations under the base calibration (the one being refined) and
+  /// their sample times; `have` says which are valid. Rates come from each segment's own
+  /// consecutive samples (frames may hold 0 or 2 new samples of a sensor). Allocation-free.
+  void add(const std::array<Eigen::Quaterniond, kSegmentCount>& q_earth_segment_base,
+           const std::array<int64_t, kSegmentCount>& t_sample_ns,
+           const std::array<bool, kSegmentCount>& have, int64_t t_ns);
+  /// Re-estimates when update_interval_s has passed since the last estimate; returns true when
+  /// the yaw offsets changed (then apply() them to the base calibration).
+  bool update(int64_t t_ns);
+
+  /// Per-segment yaw offset of the base calibration's segment frame (rad; 0 until known).
+  const std::array<double, kSegmentCount>& yaw_offset_rad() const { return alpha_; }
+  const std::array<HingeEstimate, kRefineHingeChildren.size()>& hinges() const { return est_; }
+  /// Number of hinges with a valid estimate.
+  int valid_hinges() const;
+  const HingeRefineOptions& options() const { return opt_; }
+
+  /// Mean yaw offset of the identified segments (rad): minus the base calibration's body-heading
+  /// error, since the filters' magnetometer headings scatter around the truth.
+  double common_yaw_rad() const { return common_; }
+
+  /// The base calibration with the yaw offsets removed and the body heading corrected by
+  /// `common_rad` (segments not calibrated are left alone).
+  static Calibration apply(const Calibration& base,
+                           const std::array<double, kSegmentCount>& yaw_offset_rad,
+                           double common_rad);
+
+ private:
+  struct Sums {
+    Eigen::Matrix4d h = Eigen::Matrix4d::Zero();  ///< sum a a^T
+    Eigen::Vector4d g = Eigen::Vector4d::Zero();  ///< sum a b
+    double s = 0;                                 ///< sum b^2
+    double scale = 0;                             ///< sum of (|w_p|^2 + |w_c|^2)^2
+    double travel_rad = 0;
+    int n = 0;
+  };
+  bool estimate(int hinge, HingeEstimate& out) const;
+
+  RigMapping rig_;
+  HingeRefineOptions opt_;
+  std::array<Sums, kRefineHingeChildren.size()> sums_{};
+  std::array<HingeEstimate, kRefineHingeChildren.size()> est_{};
+  std::array<Eigen::Quaterniond, kSegmentCount> q_prev_;
+  std::array<int64_t, kSegmentCount> t_prev_ns_{};
+  std::array<bool, kSegmentCount> have_prev_{};
+  std::array<Eigen::Vector3d, kSegmentCount> w_;  ///< newest rate, segment frame, rad/s
+  std::array<int64_t, kSegmentCount> t_w_ns_{};   ///< its time (0 = none)
+  std::array<double, kSegmentCount> dt_w_s_{};    ///< and the span it was taken over
+  int64_t t_last_update_ns_ = 0;
+  bool started_ = false;
+  std::array<double, kSegmentCount> alpha_{};
+  double common_ = 0;
+};
+
+}  // namespace mocap

@@ -1,0 +1,201 @@
+// Hinge-axis refinement of the calibration's per-segment heading (see hinge_calibration.hpp).
+#include "mocap/skeleton/hinge_calibration.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <limits>
+
+#include "mocap/skeleton/quat_math.hpp"
+
+namespace mocap {
+
+namespace {
+
+/// |w x j(phi)|^2 = k(w) + u(w) . (cos 2phi, sin 2phi) for j = (cos phi, sin phi, 0).
+void perp_terms(const Eigen::Vector3d& w, double& k, Eigen::Vector2d& u) {
+  k = w.z() * w.z() + 0.5 * (w.x() * w.x() + w.y() * w.y());
+  u = Eigen::Vector2d(-0.5 * (w.x() * w.x() - w.y() * w.y()), -w.x() * w.y());
+}
+
+/// Rotation vector of q (angle * axis), shortest way.
+Eigen::Vector3d rotation_vector(Eigen::Quaterniond q) {
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  const Eigen::Vector3d v = q.vec();
+  const double s = v.norm();
+  if (s < 1e-12) return 2.0 * v;
+  return v * (2.0 * std::atan2(s, q.w()) / s);
+}
+
+constexpr double kAxisPhi = M_PI / 2;  // flexion axis y: phi = 90 deg in the segment's xy plane
+
+}  // namespace
+
+HingeAxisRefiner::HingeAxisRefiner(RigMapping rig, HingeRefineOptions options)
+    : rig_(rig), opt_(options) {
+  reset();
+}
+
+void HingeAxisRefiner::reset() {
+  sums_.fill(Sums{});
+  est_.fill(HingeEstimate{});
+  q_prev_.fill(Eigen::Quaterniond::Identity());
+  t_prev_ns_.fill(0);
+  have_prev_.fill(false);
+  w_.fill(Eigen::Vector3d::Zero());
+  t_w_ns_.fill(0);
+  dt_w_s_.fill(0.0);
+  alpha_.fill(0.0);
+  common_ = 0;
+  started_ = false;
+  t_last_update_ns_ = 0;
+}
+
+void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& q,
+                           const std::array<int64_t, kSegmentCount>& t_sample_ns,
+                           const std::array<bool, kSegmentCount>& have, int64_t t_ns) {
+  if (!opt_.enabled) return;
+  if (!started_) {
+    started_ = true;
+    t_last_update_ns_ = t_ns;
+  }
+  const int64_t max_step_ns = static_cast<int64_t>(opt_.max_step_s * 1e9);
+  // 1. Per-segment rates from each segment's own consecutive samples.
+  std::array<bool, kSegmentCount> fresh{};
+  for (int i = 0; i < kSegmentCount; ++i) {
+    if (!have[i]) {
+      have_prev_[i] = false;
+      continue;
+    }
+    const int64_t dt_ns = t_sample_ns[i] - t_prev_ns_[i];
+    if (have_prev_[i] && dt_ns <= 0) continue;  // no new sample
+    if (have_prev_[i] && dt_ns <= max_step_ns) {
+      const Eigen::Vector3d w = rotation_vector(q_prev_[i].conjugate() * q[i]) / (dt_ns * 1e-9);
+      if (w.allFinite()) {
+        w_[i] = w;
+        t_w_ns_[i] = t_sample_ns[i];
+        dt_w_s_[i] = dt_ns * 1e-9;
+        fresh[i] = true;
+      }
+    }
+    q_prev_[i] = q[i];
+    t_prev_ns_[i] = t_sample_ns[i];
+    have_prev_[i] = true;
+  }
+  // 2. Each new child rate with a recent parent rate adds one residual to its hinge.
+  const double min_rate = opt_.min_rate_deg_s * kDegToRad;
+  for (size_t h = 0; h < kRefineHingeChildren.size(); ++h) {
+    const int c = index(kRefineHingeChildren[h]);
+    const int p = kSegmentParent[c];
+    if (!rig_.tracked(c) || !rig_.tracked(p) || !fresh[c] || t_w_ns_[p] == 0 ||
+        std::abs(t_w_ns_[p] - t_w_ns_[c]) > max_step_ns)
+      continue;
+    const Eigen::Vector3d& wp = w_[p];
+    const Eigen::Vector3d& wc = w_[c];
+    if (wp.norm() < min_rate && wc.norm() < min_rate) continue;
+    double kp, kc;
+    Eigen::Vector2d up, uc;
+    perp_terms(wp, kp, up);
+    perp_terms(wc, kc, uc);
+    const Eigen::Vector4d a(up.x(), up.y(), -uc.x(), -uc.y());
+    const double b = kp - kc;
+    Sums& s = sums_[h];
+    s.h.noalias() += a * a.transpose();
+    s.g += a * b;
+    s.s += b * b;
+    const double sc = wp.squaredNorm() + wc.squaredNorm();
+    s.scale += sc * sc;
+    // Flexion travel: the child's rate relative to the parent, in the child frame.
+    const Eigen::Vector3d w_rel = wc - (q[c].conjugate() * q[p]) * wp;
+    s.travel_rad += w_rel.norm() * dt_w_s_[c];
+    ++s.n;
+  }
+}
+
+bool HingeAxisRefiner::estimate(int hinge, HingeEstimate& out) const {
+  const Sums& s = sums_[hinge];
+  out.travel_deg = s.travel_rad * kRadToDeg;
+  if (s.n < 10 || s.scale <= 0) return false;
+  const auto cost = [&](double yaw_p, double yaw_c) {
+    const double fp = 2 * (kAxisPhi + yaw_p), fc = 2 * (kAxisPhi + yaw_c);
+    const Eigen::Vector4d x(std::cos(fp), std::sin(fp), std::cos(fc), std::sin(fc));
+    return x.dot(s.h * x) + 2 * s.g.dot(x) + s.s;
+  };
+  const double range = opt_.max_yaw_deg * kDegToRad;
+  double best = std::numeric_limits<double>::infinity(), bp = 0, bc = 0;
+  // Coarse grid (1 deg), then a fine one (0.05 deg) around the best point.
+  for (int pass = 0; pass < 2; ++pass) {
+    const double step = pass == 0 ? kDegToRad : 0.05 * kDegToRad;
+    const int n = pass == 0 ? static_cast<int>(std::ceil(opt_.max_yaw_deg)) : 20;
+    const double cp = pass == 0 ? 0.0 : bp, cc = pass == 0 ? 0.0 : bc;
+    for (int i = -n; i <= n; ++i) {
+      for (int j = -n; j <= n; ++j) {
+        const double yp = cp + i * step, yc = cc + j * step;
+        if (std::abs(yp) > range || std::abs(yc) > range) continue;
+        const double v = cost(yp, yc);
+        if (v < best) {
+          best = v;
+          bp = yp;
+          bc = yc;
+        }
+      }
+    }
+  }
+  out.parent_yaw_deg = bp * kRadToDeg;
+  out.child_yaw_deg = bc * kRadToDeg;
+  out.rms_residual = std::sqrt(std::max(best, 0.0) / s.scale);
+  const double edge = range - 0.5 * kDegToRad;
+  return out.travel_deg >= opt_.min_travel_deg && std::abs(bp) < edge && std::abs(bc) < edge;
+}
+
+bool HingeAxisRefiner::update(int64_t t_ns) {
+  if (!opt_.enabled || !started_) return false;
+  if (static_cast<double>(t_ns - t_last_update_ns_) * 1e-9 < opt_.update_interval_s) return false;
+  t_last_update_ns_ = t_ns;
+  std::array<double, kSegmentCount> alpha{};
+  std::array<bool, kSegmentCount> known{};
+  double sum = 0;
+  int n = 0;
+  for (size_t h = 0; h < kRefineHingeChildren.size(); ++h) {
+    HingeEstimate e;
+    e.valid = estimate(static_cast<int>(h), e);
+    est_[h] = e;
+    if (!e.valid) continue;
+    const int c = index(kRefineHingeChildren[h]);
+    const int p = kSegmentParent[c];
+    alpha[p] = e.parent_yaw_deg * kDegToRad;
+    alpha[c] = e.child_yaw_deg * kDegToRad;
+    known[p] = known[c] = true;
+    sum += alpha[p] + alpha[c];
+    n += 2;
+  }
+  if (n == 0) return false;
+  const double mean = sum / n;
+  for (int i = 0; i < kSegmentCount; ++i)
+    if (!known[i]) alpha[i] = mean;
+  const bool changed = alpha != alpha_ || mean != common_;
+  alpha_ = alpha;
+  common_ = mean;
+  return changed;
+}
+
+int HingeAxisRefiner::valid_hinges() const {
+  int n = 0;
+  for (const HingeEstimate& e : est_)
+    n += e.valid ? 1 : 0;
+  return n;
+}
+
+Calibration HingeAxisRefiner::apply(const Calibration& base,
+                                    const std::array<double, kSegmentCount>& alpha,
+                                    double common_rad) {
+  Calibration c = base;
+  c.heading_deg = base.heading_deg + common_rad * kRadToDeg;
+  for (int i = 0; i < kSegmentCount; ++i) {
+    if (!base.calibrated[i] || alpha[i] == 0) continue;
+    c.q_sensor_segment[i] = (base.q_sensor_segment[i] * yaw_rotation(alpha[i])).normalized();
+    c.q_correction[i] = (yaw_rotation(common_rad - alpha[i]) * base.q_correction[i]).normalized();
+  }
+  return c;
+}
+
+}  // namespace mocap
