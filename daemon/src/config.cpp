@@ -395,6 +395,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     k.num("countdown_s", c.calibration.countdown_s, 0, 60);
     k.num("capture_s", c.calibration.capture_s, 0.05, 10);
     k.str("file", c.calibration.file);
+    k.boolean("refine_hinges", c.calibration.refine_hinges);
     k.finish();
   }
   if (const toml::table* outs = r.table("outputs")) {
@@ -636,7 +637,8 @@ std::string config_to_toml(const Config& c) {
   root.insert("calibration", toml::table{{"pose", c.calibration.pose},
                                          {"countdown_s", c.calibration.countdown_s},
                                          {"capture_s", c.calibration.capture_s},
-                                         {"file", c.calibration.file}});
+                                         {"file", c.calibration.file},
+                                         {"refine_hinges", c.calibration.refine_hinges}});
   toml::table outs;
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
                                   {"bind", c.outputs.json.bind},

@@ -26,6 +26,7 @@ SkeletonOptions skeleton_options(const Config& cfg) {
   o.limit_policy = cfg.body.enforce_limits ? LimitPolicy::clamp : LimitPolicy::report;
   o.root.pinned = !cfg.body.root_motion;
   o.stale_after_ns = static_cast<int64_t>(cfg.pipeline.stale_after_ms * 1e6);
+  o.hinge_refine.enabled = cfg.calibration.refine_hinges;
   return o;
 }
 

@@ -49,6 +49,9 @@ struct CalibrationConfig {
   double countdown_s = 3.0;    ///< seconds from the command to the capture
   double capture_s = 1.0;      ///< seconds averaged during the capture
   std::string file;            ///< saved calibration loaded at start, written after each one
+  /// Refine the calibration from knee/elbow motion after it (skeleton/hinge_calibration.hpp):
+  /// each segment's mounting yaw and the body heading. Off: the still pose alone.
+  bool refine_hinges = true;
   /// Body forward (+x) in the pelvis sensor's frame: the heading axis of a calibration. Not a
   /// file key: the default suits a pelvis sensor worn with +x forward; the demo sets its
   /// performer's belt-clip axis.
