@@ -57,10 +57,20 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
         {"npose_mount_yaw_error_deg", r.npose_mount_yaw_error_deg[s]},
         {"mount_yaw_error_deg", r.mount_yaw_error_deg[s]},
         {"filter_heading_drift_deg", r.sensor_heading_drift_deg[s]},
-        {"filter_inclination_rmse_deg", r.sensor_inclination_rmse_deg[s]}};
+        {"filter_inclination_rmse_deg", r.sensor_inclination_rmse_deg[s]},
+        {"mag_disturbed_fraction", r.sensor_mag_disturbed_fraction[s]}};
   }
   j["sensor_diagnostics"] = diag;
   j["hinges_identified"] = r.hinges_identified;
+  for (size_t h = 0; h < r.hinges.size(); ++h) {
+    const HingeEstimate& e = r.hinges[h];
+    j["hinge_refinement"][std::string(kJointNames[index(kRefineHingeChildren[h])])] = {
+        {"valid", e.valid},
+        {"travel_deg", e.travel_deg},
+        {"parent_yaw_deg", e.parent_yaw_deg},
+        {"child_yaw_deg", e.child_yaw_deg},
+        {"rms_residual", e.rms_residual}};
+  }
   j["root_drift_m"] = r.root_drift_m;
   j["root_max_error_m"] = r.root_max_error_m;
   j["distance_walked_m"] = r.distance_walked_m;
@@ -131,6 +141,7 @@ int run_accuracy(int argc, char** argv) {
       .flag(
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
+      .flag("hold", "hold each disturbed sensor's heading on its gyro (heading_hold.hpp)")
       .flag("no-refine", "N-pose calibration only (no hinge-motion refinement)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
@@ -158,6 +169,7 @@ int run_accuracy(int argc, char** argv) {
   else if (heading == "truth")
     base.heading = HeadingSource::explicit_heading;
   if (args.has("no-refine")) base.hinge_refine.enabled = false;
+  base.heading_hold.enabled = args.has("hold");
   base.calibration_moves = args.has("calibration-moves");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();
   if (args.has("sensor-errors")) {

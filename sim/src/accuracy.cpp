@@ -56,6 +56,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
 
   const RigMapping rig = performer_rig();
   std::vector<AttitudeFilter> filters(Performer::kSensorCount);
+  std::vector<HeadingHold> holds(Performer::kSensorCount, HeadingHold(o.heading_hold));
   CalibratorOptions copt;
   copt.capture_s = o.capture_s;
   copt.heading = o.heading;
@@ -85,7 +86,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   bool evaluating = false;
   Calibration npose_calibration;
   // Filter heading error at the first evaluated frame, per sensor, and the running sums.
-  std::array<double, Performer::kSensorCount> heading0_deg{}, heading_sq{}, incl_sq{};
+  std::array<double, Performer::kSensorCount> heading0_deg{}, heading_sq{}, incl_sq{},
+      mag_disturbed{};
   const auto yaw_deg = [](const Eigen::Quaterniond& q) {
     const Eigen::Vector3d x = q * Eigen::Vector3d::UnitX();
     return std::atan2(x.y(), x.x()) * kRadToDeg;
@@ -99,12 +101,14 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       AttitudeFilter& f = filters[s.sensor_id];
       f.update(s);
       const int seg = index(Performer::sensor_segment(s.sensor_id));
+      const Eigen::Quaterniond q = holds[s.sensor_id].update(
+          f.q_earth_sensor(), f.q_earth_sensor_6d(), f.mag_disturbed(), s.t_host_ns);
       if (calibrator.capturing()) {
-        calibrator.add_sample(seg, f.q_earth_sensor(), s.t_host_ns, &s.acc_m_s2);
+        calibrator.add_sample(seg, q, s.t_host_ns, &s.acc_m_s2);
       } else if (r.calibrated) {
         uint32_t flags = f.at_rest() ? uint32_t{kSegAtRest} : 0u;
         if (f.mag_disturbed()) flags |= kSegMagDisturbed;
-        skeleton.set_sensor_orientation(seg, f.q_earth_sensor(), s.t_host_ns, flags);
+        skeleton.set_sensor_orientation(seg, q, s.t_host_ns, flags);
       }
     }
     if (calibrator.capturing() && calibrator.done(t_ns)) {
@@ -158,6 +162,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       if (r.frames == 1) heading0_deg[id] = h;
       const double dh = std::remainder(h - heading0_deg[id], 360.0);
       heading_sq[id] += dh * dh;
+      if (filters[id].mag_disturbed()) ++mag_disturbed[id];
       const double c = std::clamp((q_err * Eigen::Vector3d::UnitZ()).z(), -1.0, 1.0);
       incl_sq[id] += std::pow(std::acos(c) * kRadToDeg, 2);
     }
@@ -184,6 +189,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   // Calibration diagnostics: the mounting's yaw about the segment's vertical vs the true mount.
   const Calibration& used = skeleton.calibration();
   r.hinges_identified = skeleton.hinge_refiner().valid_hinges();
+  r.hinges = skeleton.hinge_refiner().hinges();
   for (int id = 0; id < Performer::kSensorCount; ++id) {
     const int s = index(Performer::sensor_segment(id));
     const Eigen::Quaterniond& q_seg_sensor = perf.mount(id).q_segment_sensor;
@@ -191,6 +197,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     r.mount_yaw_error_deg[s] = yaw_deg(q_seg_sensor * used.q_sensor_segment[s]);
     r.sensor_heading_drift_deg[s] = std::sqrt(heading_sq[id] / r.frames);
     r.sensor_inclination_rmse_deg[s] = std::sqrt(incl_sq[id] / r.frames);
+    r.sensor_mag_disturbed_fraction[s] = mag_disturbed[id] / r.frames;
   }
   r.root_drift_fraction = r.distance_walked_m >= 1.0 ? r.root_drift_m / r.distance_walked_m : 0.0;
   return r;

@@ -10,6 +10,7 @@
 #include "mocap/core/segments.hpp"
 #include "mocap/sim/sensor_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/heading_hold.hpp"
 #include "mocap/skeleton/hinge_calibration.hpp"
 
 namespace mocap::sim {
@@ -30,6 +31,9 @@ struct AccuracyOptions {
   double explicit_heading_deg = 0;
   /// Hinge-motion refinement of the calibration (on by default, as in the daemon).
   HingeRefineOptions hinge_refine{};
+  /// While a filter flags its magnetometer disturbed, use its 6-D orientation with the last
+  /// trusted heading offset (heading_hold.hpp; opt-in).
+  HeadingHoldOptions heading_hold{};
   /// The calibration procedure includes the calibration moves (knee bends with elbow curls,
   /// make_motion("calibrate+<motion>")) after the N-pose; the evaluation starts after them.
   bool calibration_moves = false;
@@ -62,7 +66,10 @@ struct AccuracyResult {
   /// The filter's own errors over the evaluation: RMS change of its heading error since the
   /// evaluation began (what no calibration can absorb), and RMS inclination error.
   std::array<double, kSegmentCount> sensor_heading_drift_deg{}, sensor_inclination_rmse_deg{};
+  /// Fraction of evaluated frames the filter flagged the sensor's magnetometer as disturbed.
+  std::array<double, kSegmentCount> sensor_mag_disturbed_fraction{};
   int hinges_identified = 0;  ///< knees/elbows whose axis the refinement identified
+  std::array<HingeEstimate, kRefineHingeChildren.size()> hinges{};  ///< the refinement's state
 };
 
 /// Joints whose both segments carry sensors and are 3-DOF (waist, shoulders, wrists, hips,
