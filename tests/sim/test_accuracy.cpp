@@ -1,8 +1,9 @@
 // End-to-end accuracy regression: realistic consumer-MEMS sensors on the virtual performer,
-// through our AttitudeFilter, N-pose calibration and the skeleton, against ground truth.
+// through our AttitudeFilter, N-pose calibration (refined from knee/elbow motion) and the
+// skeleton, against ground truth (seed 1; docs/accuracy.md has seeds 1..5).
 // Where the targets (elbow/knee <= 2 deg, 3-DOF <= 3 deg, root drift <= 5 %) are met they
-// are asserted; where they are NOT met yet (realistic sensors: see docs/accuracy.md) the bound is a
-// regression guard ~25 % above the measured value, named as such.
+// are asserted; where they are NOT met (see docs/accuracy.md) the bound is a regression guard
+// ~25 % above the measured value, named as such.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,19 +13,11 @@
 namespace mocap::sim {
 namespace {
 
-TEST(Accuracy, ArmRaiseThroughNinetyDegreesWithRealisticSensors) {
-  AccuracyOptions o;
-  o.motion = "arm_raise";
-  const AccuracyResult r = run_accuracy(o);
-  ASSERT_TRUE(r.calibrated) << r.calibration_message;
-  EXPECT_GT(r.frames, 1000);
-  RecordProperty("hinge_max_rmse_deg", std::to_string(r.hinge_max_rmse_deg));
-  RecordProperty("three_dof_max_rmse_deg", std::to_string(r.three_dof_max_rmse_deg));
-  // Measured 4.5 / 5.5 deg (seed 1): target missed, regression guard only.
-  EXPECT_LE(r.hinge_max_rmse_deg, 5.5);
-  EXPECT_LE(r.three_dof_max_rmse_deg, 7.0);
-  for (int s = 0; s < kSegmentCount; ++s)
-    EXPECT_TRUE(std::isfinite(r.segment_rmse_deg[s]));
+void record(const AccuracyResult& r) {
+  testing::Test::RecordProperty(r.motion + "_" + r.disturbance + "_hinge_deg",
+                                std::to_string(r.hinge_max_rmse_deg));
+  testing::Test::RecordProperty(r.motion + "_" + r.disturbance + "_three_dof_deg",
+                                std::to_string(r.three_dof_max_rmse_deg));
 }
 
 TEST(Accuracy, WalkJointAnglesAndRootDrift) {
@@ -32,11 +25,63 @@ TEST(Accuracy, WalkJointAnglesAndRootDrift) {
   o.motion = "walk";
   const AccuracyResult r = run_accuracy(o);
   ASSERT_TRUE(r.calibrated) << r.calibration_message;
+  record(r);
   EXPECT_GT(r.distance_walked_m, 5.0);
-  EXPECT_LE(r.root_drift_fraction, 0.05);  // target (measured 3.2 %)
-  // Measured 2.40 / 2.20 deg (seed 1): 3-DOF meets its 3 deg target, the knee misses 2 deg.
-  EXPECT_LE(r.hinge_max_rmse_deg, 3.0);
+  EXPECT_LE(r.root_drift_fraction, 0.05);  // target (measured 2.1 %)
+  // Targets, met: measured 1.39 / 1.33 deg (seeds 1..5: at most 1.86 / 2.31).
+  EXPECT_LE(r.hinge_max_rmse_deg, 2.0);
   EXPECT_LE(r.three_dof_max_rmse_deg, 3.0);
+  // The knees identified their axes during the walk.
+  EXPECT_GE(r.hinges_identified, 2);
+}
+
+TEST(Accuracy, HingeRefinementRemovesTheCalibrationHeadingError) {
+  // Without refinement the pelvis sensor's mount misalignment turns every joint axis (2.40 deg
+  // knee); the refinement identifies each segment's mounting yaw from the knees (1.39 deg).
+  AccuracyOptions o;
+  o.motion = "walk";
+  const AccuracyResult refined = run_accuracy(o);
+  o.hinge_refine.enabled = false;
+  const AccuracyResult npose_only = run_accuracy(o);
+  ASSERT_TRUE(refined.calibrated && npose_only.calibrated);
+  record(npose_only);
+  EXPECT_LT(refined.hinge_max_rmse_deg, npose_only.hinge_max_rmse_deg - 0.5);
+  // The identified segments' mounting yaw vs the true mount: the N-pose left ~4-5 deg.
+  for (Segment s : {Segment::thigh_l, Segment::shank_l, Segment::thigh_r, Segment::shank_r}) {
+    EXPECT_LT(std::abs(refined.mount_yaw_error_deg[index(s)]), 2.0) << name(s);
+    EXPECT_GT(std::abs(npose_only.npose_mount_yaw_error_deg[index(s)]), 2.5) << name(s);
+  }
+}
+
+TEST(Accuracy, SquatAfterCalibrationMoves) {
+  // N-pose + calibration moves (knee bends with elbow curls), then the squat.
+  AccuracyOptions o;
+  o.motion = "squat";
+  o.calibration_moves = true;
+  const AccuracyResult r = run_accuracy(o);
+  ASSERT_TRUE(r.calibrated) << r.calibration_message;
+  record(r);
+  EXPECT_EQ(r.hinges_identified, 4);
+  // Targets, met for seed 1: measured 1.68 / 2.02 deg (seeds 1..5: at most 2.38 / 3.61 —
+  // missed by seed 4, docs/accuracy.md).
+  EXPECT_LE(r.hinge_max_rmse_deg, 2.0);
+  EXPECT_LE(r.three_dof_max_rmse_deg, 3.0);
+}
+
+TEST(Accuracy, ArmRaiseThroughNinetyDegreesWithRealisticSensors) {
+  AccuracyOptions o;
+  o.motion = "arm_raise";
+  o.calibration_moves = true;
+  const AccuracyResult r = run_accuracy(o);
+  ASSERT_TRUE(r.calibrated) << r.calibration_message;
+  EXPECT_GT(r.frames, 1000);
+  record(r);
+  // Measured 3.18 / 4.08 deg (seed 1): target missed (the filters' heading drift between
+  // sensors, docs/accuracy.md), regression guard only.
+  EXPECT_LE(r.hinge_max_rmse_deg, 4.0);
+  EXPECT_LE(r.three_dof_max_rmse_deg, 5.1);
+  for (int s = 0; s < kSegmentCount; ++s)
+    EXPECT_TRUE(std::isfinite(r.segment_rmse_deg[s]));
 }
 
 TEST(Accuracy, IdealSensorsIsolateThePipeline) {
@@ -48,9 +93,28 @@ TEST(Accuracy, IdealSensorsIsolateThePipeline) {
     o.motion = m;
     const AccuracyResult r = run_accuracy(o);
     ASSERT_TRUE(r.calibrated) << r.calibration_message;
-    EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << m;  // target (measured <= 0.95)
+    EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << m;  // target (measured <= 0.84)
     EXPECT_LE(r.three_dof_max_rmse_deg, 3.0) << m;
   }
+}
+
+TEST(Accuracy, MagnetAndDeskWalkWithHeadingHold) {
+  // Magnet beside the right thigh + steel desk: the targets are missed (14-23 deg at the hinge
+  // next to the magnet). Holding each flagged sensor's heading on its gyro more than halves the
+  // walk's knee/elbow error: measured 14.34 -> 6.42 deg (seed 1). Regression guards.
+  AccuracyOptions o;
+  o.motion = "walk";
+  o.disturbance = "both";
+  const AccuracyResult plain = run_accuracy(o);
+  o.heading_hold.enabled = true;
+  const AccuracyResult held = run_accuracy(o);
+  ASSERT_TRUE(plain.calibrated && held.calibrated);
+  record(plain);
+  record(held);
+  EXPECT_LE(plain.hinge_max_rmse_deg, 18.0);
+  EXPECT_LE(held.hinge_max_rmse_deg, 8.0);
+  EXPECT_LT(held.hinge_max_rmse_deg, 0.6 * plain.hinge_max_rmse_deg);
+  EXPECT_LE(held.root_drift_fraction, 0.08);  // measured 6.3 %: target (5 %) missed
 }
 
 TEST(Accuracy, UnknownDisturbanceIsRejected) {

@@ -48,6 +48,36 @@ TEST(Motion, UnknownNameIsRejectedWithTheValidNames) {
   }
 }
 
+// "calibrate+<motion>": the stand, the calibration moves (knees and elbows flex, back to the
+// N-pose), then the motion without its own leading stand.
+TEST(Motion, CalibrationMovesPrecedeTheMotion) {
+  const auto plain = make_motion("squat");
+  const auto with = make_motion("calibrate+squat");
+  EXPECT_NEAR(with->duration_s(), plain->duration_s() + calibration_moves_s(), 1e-9);
+  EXPECT_EQ(with->calibration_window_s(), plain->calibration_window_s());
+  const double t_moves = with->calibration_window_s().second;
+  double max_knee_deg = 0, max_elbow_deg = 0;
+  BodyPose p;
+  for (double t = t_moves; t < t_moves + calibration_moves_s(); t += 0.01) {
+    with->pose(t, p);
+    max_knee_deg = std::max(max_knee_deg, angle_deg(p.q_parent_segment[index(Segment::shank_l)],
+                                                    Eigen::Quaterniond::Identity()));
+    max_elbow_deg = std::max(max_elbow_deg, angle_deg(p.q_parent_segment[index(Segment::forearm_r)],
+                                                      Eigen::Quaterniond::Identity()));
+  }
+  EXPECT_GT(max_knee_deg, 50);
+  EXPECT_GT(max_elbow_deg, 80);
+  // After the moves: the squat, in step with the plain motion after its stand.
+  BodyPose a, b;
+  with->pose(t_moves + calibration_moves_s() + 2.0, a);
+  plain->pose(t_moves + 2.0, b);
+  EXPECT_LT(angle_deg(a.q_parent_segment[index(Segment::shank_l)],
+                      b.q_parent_segment[index(Segment::shank_l)]),
+            1e-9);
+  EXPECT_THROW(make_motion("calibrate+npose"), std::invalid_argument);
+  EXPECT_THROW(make_motion("calibrate+moonwalk"), std::invalid_argument);
+}
+
 // Lowest contact point (heel below the ankle, or toe = foot end point) of a foot.
 // With `point` >= 0 the same point (0 heel, 1 toe) is returned, else the lower one.
 Eigen::Vector3d contact(const BodyDimensions& d, const TruthFrame& f, Segment foot,
