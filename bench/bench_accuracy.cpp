@@ -141,6 +141,7 @@ int run_accuracy(int argc, char** argv) {
       .flag(
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
+      .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
       .flag("hold", "hold each disturbed sensor's heading on its gyro (heading_hold.hpp)")
       .flag("no-refine", "N-pose calibration only (no hinge-motion refinement)")
       .option("sensor-errors",
@@ -170,6 +171,7 @@ int run_accuracy(int argc, char** argv) {
     base.heading = HeadingSource::explicit_heading;
   if (args.has("no-refine")) base.hinge_refine.enabled = false;
   base.heading_hold.enabled = args.has("hold");
+  if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();
   if (args.has("sensor-errors")) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mocap/filter/attitude_filter.hpp"
+#include "mocap/filter/filter_param_names.hpp"
 #include "mocap/sim/motion.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/skeleton/calibration.hpp"
@@ -55,7 +56,13 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   r.disturbance = o.disturbance;
 
   const RigMapping rig = performer_rig();
-  std::vector<AttitudeFilter> filters(Performer::kSensorCount);
+  FilterParams fp;
+  for (const std::string& a : o.filter_params) {
+    std::string err;
+    if (!set_filter_param(fp, a, err))
+      throw std::invalid_argument("accuracy: filter parameter '" + a + "': " + err);
+  }
+  std::vector<AttitudeFilter> filters(Performer::kSensorCount, AttitudeFilter(fp));
   std::vector<HeadingHold> holds(Performer::kSensorCount, HeadingHold(o.heading_hold));
   CalibratorOptions copt;
   copt.capture_s = o.capture_s;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "mocap/core/segments.hpp"
 #include "mocap/sim/sensor_model.hpp"
@@ -34,6 +35,9 @@ struct AccuracyOptions {
   /// While a filter flags its magnetometer disturbed, use its 6-D orientation with the last
   /// trusted heading offset (heading_hold.hpp; opt-in).
   HeadingHoldOptions heading_hold{};
+  /// AttitudeFilter parameter overrides ("name=value", as `mocap filter --param`), e.g. to see
+  /// what a filter change would gain; default: the filter's defaults, as the daemon uses.
+  std::vector<std::string> filter_params;
   /// The calibration procedure includes the calibration moves (knee bends with elbow curls,
   /// make_motion("calibrate+<motion>")) after the N-pose; the evaluation starts after them.
   bool calibration_moves = false;
