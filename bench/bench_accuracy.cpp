@@ -64,12 +64,15 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
   j["hinges_identified"] = r.hinges_identified;
   for (size_t h = 0; h < r.hinges.size(); ++h) {
     const HingeEstimate& e = r.hinges[h];
-    j["hinge_refinement"][std::string(kJointNames[index(kRefineHingeChildren[h])])] = {
-        {"valid", e.valid},
-        {"travel_deg", e.travel_deg},
-        {"parent_yaw_deg", e.parent_yaw_deg},
-        {"child_yaw_deg", e.child_yaw_deg},
-        {"rms_residual", e.rms_residual}};
+    const RefinePair& pr = kRefinePairs[h];
+    const std::string key = std::string(name(pr.parent)) + "-" + std::string(name(pr.child));
+    j["hinge_refinement"][key] = {{"valid", e.valid},
+                                  {"travel_deg", e.travel_deg},
+                                  {"parent_yaw_deg", e.parent_yaw_deg},
+                                  {"child_yaw_deg", e.child_yaw_deg},
+                                  {"rms_residual", e.rms_residual},
+                                  {"parent_travel_deg", e.parent_travel_deg},
+                                  {"parent_valid", e.parent_valid}};
   }
   j["root_drift_m"] = r.root_drift_m;
   j["root_max_error_m"] = r.root_max_error_m;

@@ -83,15 +83,25 @@ void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& 
   }
   // 2. Each new child rate with a recent parent rate adds one residual to its hinge.
   const double min_rate = opt_.min_rate_deg_s * kDegToRad;
-  for (size_t h = 0; h < kRefineHingeChildren.size(); ++h) {
-    const int c = index(kRefineHingeChildren[h]);
-    const int p = kSegmentParent[c];
+  for (size_t h = 0; h < kRefinePairs.size(); ++h) {
+    const int c = index(kRefinePairs[h].child);
+    const int p = index(kRefinePairs[h].parent);
+    const int v = kRefinePairs[h].via;
     if (!rig_.tracked(c) || !rig_.tracked(p) || !fresh[c] || t_w_ns_[p] == 0 ||
         std::abs(t_w_ns_[p] - t_w_ns_[c]) > max_step_ns)
       continue;
     const Eigen::Vector3d& wp = w_[p];
     const Eigen::Vector3d& wc = w_[c];
     if (wp.norm() < min_rate && wc.norm() < min_rate) continue;
+    if (v >= 0) {
+      // The joint between `via` and the child (the wrist) must be still.
+      if (!rig_.tracked(v) || !have[v] || t_w_ns_[v] == 0 ||
+          std::abs(t_w_ns_[v] - t_w_ns_[c]) > max_step_ns)
+        continue;
+      const double w_joint = (wc - (q[c].conjugate() * q[v]) * w_[v]).norm();
+      const double w_hinge = (wc - (q[c].conjugate() * q[p]) * wp).norm();
+      if (w_joint > opt_.via_still_fraction * w_hinge + 0.5 * min_rate) continue;
+    }
     double kp, kc;
     Eigen::Vector2d up, uc;
     perp_terms(wp, kp, up);
@@ -107,6 +117,9 @@ void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& 
     // Flexion travel: the child's rate relative to the parent, in the child frame.
     const Eigen::Vector3d w_rel = wc - (q[c].conjugate() * q[p]) * wp;
     s.travel_rad += w_rel.norm() * dt_w_s_[c];
+    // The parent's rotation about axes other than the hinge axis (y) while the hinge flexes:
+    // what pins the parent's yaw.
+    if (w_rel.norm() > 2 * min_rate) s.parent_travel_rad += std::hypot(wp.x(), wp.z()) * dt_w_s_[c];
     ++s.n;
   }
 }
@@ -143,8 +156,12 @@ bool HingeAxisRefiner::estimate(int hinge, HingeEstimate& out) const {
   out.parent_yaw_deg = bp * kRadToDeg;
   out.child_yaw_deg = bc * kRadToDeg;
   out.rms_residual = std::sqrt(std::max(best, 0.0) / s.scale);
+  out.parent_travel_deg = s.parent_travel_rad * kRadToDeg;
   const double edge = range - 0.5 * kDegToRad;
-  return out.travel_deg >= opt_.min_travel_deg && std::abs(bp) < edge && std::abs(bc) < edge;
+  const bool ok = out.travel_deg >= opt_.min_travel_deg && std::abs(bc) < edge;
+  out.parent_valid =
+      ok && std::abs(bp) < edge && s.parent_travel_rad >= opt_.min_parent_off_axis_deg * kDegToRad;
+  return ok;
 }
 
 bool HingeAxisRefiner::update(int64_t t_ns) {
@@ -155,18 +172,23 @@ bool HingeAxisRefiner::update(int64_t t_ns) {
   std::array<bool, kSegmentCount> known{};
   double sum = 0;
   int n = 0;
-  for (size_t h = 0; h < kRefineHingeChildren.size(); ++h) {
+  for (size_t h = 0; h < kRefinePairs.size(); ++h) {
     HingeEstimate e;
     e.valid = estimate(static_cast<int>(h), e);
     est_[h] = e;
     if (!e.valid) continue;
-    const int c = index(kRefineHingeChildren[h]);
-    const int p = kSegmentParent[c];
-    alpha[p] = e.parent_yaw_deg * kDegToRad;
+    const int c = index(kRefinePairs[h].child);
+    const int p = index(kRefinePairs[h].parent);
     alpha[c] = e.child_yaw_deg * kDegToRad;
-    known[p] = known[c] = true;
-    sum += alpha[p] + alpha[c];
-    n += 2;
+    known[c] = true;
+    sum += alpha[c];
+    ++n;
+    if (kRefinePairs[h].via < 0 && e.parent_valid) {
+      alpha[p] = e.parent_yaw_deg * kDegToRad;
+      known[p] = true;
+      sum += alpha[p];
+      ++n;
+    }
   }
   if (n == 0) return false;
   const double mean = sum / n;
@@ -180,8 +202,8 @@ bool HingeAxisRefiner::update(int64_t t_ns) {
 
 int HingeAxisRefiner::valid_hinges() const {
   int n = 0;
-  for (const HingeEstimate& e : est_)
-    n += e.valid ? 1 : 0;
+  for (size_t h = 0; h < kRefineHingeCount; ++h)
+    n += est_[h].valid ? 1 : 0;
   return n;
 }
 

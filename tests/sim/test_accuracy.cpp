@@ -76,10 +76,11 @@ TEST(Accuracy, ArmRaiseThroughNinetyDegreesWithRealisticSensors) {
   ASSERT_TRUE(r.calibrated) << r.calibration_message;
   EXPECT_GT(r.frames, 1000);
   record(r);
-  // Measured 3.18 / 4.08 deg (seed 1): target missed (the filters' heading drift between
-  // sensors, docs/accuracy.md), regression guard only.
+  // Measured 3.18 / 2.18 deg (seed 1): 3-DOF meets its target for seed 1 (seeds 1..5: up to
+  // 4.29); the elbow misses (the filters' heading drift between sensors, docs/accuracy.md):
+  // regression guard only.
   EXPECT_LE(r.hinge_max_rmse_deg, 4.0);
-  EXPECT_LE(r.three_dof_max_rmse_deg, 5.1);
+  EXPECT_LE(r.three_dof_max_rmse_deg, 3.0);
   for (int s = 0; s < kSegmentCount; ++s)
     EXPECT_TRUE(std::isfinite(r.segment_rmse_deg[s]));
 }
@@ -115,6 +116,24 @@ TEST(Accuracy, MagnetAndDeskWalkWithHeadingHold) {
   EXPECT_LE(held.hinge_max_rmse_deg, 8.0);
   EXPECT_LT(held.hinge_max_rmse_deg, 0.6 * plain.hinge_max_rmse_deg);
   EXPECT_LE(held.root_drift_fraction, 0.08);  // measured 6.3 %: target (5 %) missed
+}
+
+TEST(Accuracy, MagnetAndDeskSquatAfterCalibrationMovesWithHeadingHold) {
+  // Next to the magnet the N-pose takes the local field direction as a mounting yaw (21 deg on
+  // the right forearm); the calibration moves identify it at the elbow, the hold keeps the
+  // gyro heading. Measured 1.52 / 5.04 deg (seed 1; plain pipeline 16.20 / 7.61): the hinge
+  // meets its target for seed 1 (seeds 1..5: up to 2.74), 3-DOF misses (the hand beside the
+  // magnet): guard.
+  AccuracyOptions o;
+  o.motion = "squat";
+  o.disturbance = "both";
+  o.calibration_moves = true;
+  o.heading_hold.enabled = true;
+  const AccuracyResult r = run_accuracy(o);
+  ASSERT_TRUE(r.calibrated) << r.calibration_message;
+  record(r);
+  EXPECT_LE(r.hinge_max_rmse_deg, 2.0);
+  EXPECT_LE(r.three_dof_max_rmse_deg, 6.3);
 }
 
 TEST(Accuracy, UnknownDisturbanceIsRejected) {

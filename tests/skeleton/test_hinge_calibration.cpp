@@ -132,20 +132,28 @@ TEST(HingeCalibration, IdentifiesYawOffsetsAndCorrectsJoints) {
   RecordProperty("worst_joint_after_deg", std::to_string(after.worst_joint_deg));
   // Each refined segment's mounting yaw (vs the truth) is within 1 deg (the N-pose left up to
   // ~10 deg: heading error plus filter heading offsets).
-  for (Segment c : kRefineHingeChildren) {
-    for (int seg : {index(c), static_cast<int>(kSegmentParent[index(c)])}) {
+  for (size_t h = 0; h < kRefineHingeCount; ++h) {
+    for (int seg : {index(kRefinePairs[h].child), index(kRefinePairs[h].parent)}) {
       const Eigen::Quaterniond d =
           s.q_sensor_segment[seg].conjugate() * sk.calibration().q_sensor_segment[seg];
       const Eigen::Vector3d x = d * Eigen::Vector3d::UnitX();
       EXPECT_LT(std::abs(std::atan2(x.y(), x.x()) * kRadToDeg), 1.0) << kSegmentNames[seg];
     }
   }
+  // The hands ride on the forearms (wrists still here): the elbow identifies them too.
+  for (Segment hand : {Segment::hand_l, Segment::hand_r}) {
+    const int seg = index(hand);
+    const Eigen::Quaterniond d =
+        s.q_sensor_segment[seg].conjugate() * sk.calibration().q_sensor_segment[seg];
+    const Eigen::Vector3d x = d * Eigen::Vector3d::UnitX();
+    EXPECT_LT(std::abs(std::atan2(x.y(), x.x()) * kRadToDeg), 1.0) << kSegmentNames[seg];
+  }
   // The body heading is corrected too: the refined calibration's heading is near the truth (0).
   EXPECT_LT(std::abs(sk.calibration().heading_deg), 2.0);
   // Per-hinge diagnostics are filled.
-  for (const HingeEstimate& e : sk.hinge_refiner().hinges()) {
-    EXPECT_TRUE(e.valid);
-    EXPECT_GT(e.travel_deg, 150);
+  for (size_t h = 0; h < kRefineHingeCount; ++h) {
+    EXPECT_TRUE(sk.hinge_refiner().hinges()[h].valid);
+    EXPECT_GT(sk.hinge_refiner().hinges()[h].travel_deg, 150);
   }
 }
 

@@ -73,7 +73,7 @@ struct AccuracyResult {
   /// Fraction of evaluated frames the filter flagged the sensor's magnetometer as disturbed.
   std::array<double, kSegmentCount> sensor_mag_disturbed_fraction{};
   int hinges_identified = 0;  ///< knees/elbows whose axis the refinement identified
-  std::array<HingeEstimate, kRefineHingeChildren.size()> hinges{};  ///< the refinement's state
+  std::array<HingeEstimate, kRefinePairs.size()> hinges{};  ///< the refinement's state
 };
 
 /// Joints whose both segments carry sensors and are 3-DOF (waist, shoulders, wrists, hips,

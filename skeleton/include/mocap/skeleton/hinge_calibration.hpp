@@ -38,24 +38,48 @@ struct HingeRefineOptions {
   /// A hinge's estimate is used once the joint has flexed this much in total (sum of |rate| dt
   /// of the relative rotation): ~1.5 walking strides, one deep knee bend, one elbow curl.
   double min_travel_deg = 150;
-  double max_yaw_deg = 25;         ///< search range of each segment's yaw offset
+  double max_yaw_deg = 40;         ///< search range of each segment's yaw offset
   double update_interval_s = 0.5;  ///< re-estimation period
   double max_step_s = 0.1;     ///< increments over longer gaps (and rates older than this) unused
   double min_rate_deg_s = 10;  ///< increments with both segments slower than this are skipped
+  /// A via pair's sample counts while the joint before its child moves slower than this
+  /// fraction of the hinge's relative rate plus min_rate_deg_s / 2.
+  double via_still_fraction = 0.25;
+  /// The parent's yaw is used only if the parent itself turned this much about axes other than
+  /// the hinge axis (rotation about the axis alone, or none, leaves its yaw open).
+  double min_parent_off_axis_deg = 0;
 };
 
 /// One hinge's identification state (for diagnostics and the daemon's status).
 struct HingeEstimate {
-  bool valid = false;         ///< travel reached and the fit is well-conditioned
-  double travel_deg = 0;      ///< accumulated flexion travel
-  double parent_yaw_deg = 0;  ///< estimated yaw offset of the parent's calibrated frame
-  double child_yaw_deg = 0;   ///< ... and of the child's
-  double rms_residual = 0;    ///< RMS of |w_p x j_p|^2 - |w_c x j_c|^2 relative to its scale
+  bool valid = false;            ///< travel reached and the fit is well-conditioned
+  double travel_deg = 0;         ///< accumulated flexion travel
+  double parent_yaw_deg = 0;     ///< estimated yaw offset of the parent's calibrated frame
+  double child_yaw_deg = 0;      ///< ... and of the child's
+  double rms_residual = 0;       ///< RMS of |w_p x j_p|^2 - |w_c x j_c|^2 relative to its scale
+  double parent_travel_deg = 0;  ///< the parent's own rotation off the hinge axis meanwhile
+  bool parent_valid = false;     ///< the parent turned enough to pin its yaw too
 };
 
-/// The hinges used: knees (thigh-shank) and elbows (upper arm-forearm), flexion about y.
-inline constexpr std::array<Segment, 4> kRefineHingeChildren = {
-    Segment::shank_l, Segment::shank_r, Segment::forearm_l, Segment::forearm_r};
+/// A segment pair moving about one hinge: knees (thigh-shank) and elbows (upper arm-forearm),
+/// flexion about y. With `via` set, the child is the segment beyond the hinge's child (the hand
+/// beyond the forearm) and a sample counts only while the joint between them (the wrist) is
+/// still, so the elbow's flexion identifies the hand's mounting yaw too; only the child's
+/// estimate is used from such a pair.
+struct RefinePair {
+  Segment parent, child;
+  int via = -1;  ///< segment index between the hinge and `child`, or -1
+};
+inline constexpr std::array<RefinePair, 6> kRefinePairs = {{
+    {Segment::thigh_l, Segment::shank_l},
+    {Segment::thigh_r, Segment::shank_r},
+    {Segment::upper_arm_l, Segment::forearm_l},
+    {Segment::upper_arm_r, Segment::forearm_r},
+    {Segment::upper_arm_l, Segment::hand_l, index(Segment::forearm_l)},
+    {Segment::upper_arm_r, Segment::hand_r, index(Segment::forearm_r)},
+}};
+/// The pairs that are hinges of their own (no via): the first four.
+inline constexpr size_t kRefineHingeCount = 4;
 
 class HingeAxisRefiner {
  public:
@@ -75,8 +99,8 @@ class HingeAxisRefiner {
 
   /// Per-segment yaw offset of the base calibration's segment frame (rad; 0 until known).
   const std::array<double, kSegmentCount>& yaw_offset_rad() const { return alpha_; }
-  const std::array<HingeEstimate, kRefineHingeChildren.size()>& hinges() const { return est_; }
-  /// Number of hinges with a valid estimate.
+  const std::array<HingeEstimate, kRefinePairs.size()>& hinges() const { return est_; }
+  /// Number of hinges (knees, elbows; not the via pairs) with a valid estimate.
   int valid_hinges() const;
   const HingeRefineOptions& options() const { return opt_; }
 
@@ -97,14 +121,15 @@ class HingeAxisRefiner {
     double s = 0;                                 ///< sum b^2
     double scale = 0;                             ///< sum of (|w_p|^2 + |w_c|^2)^2
     double travel_rad = 0;
+    double parent_travel_rad = 0;  ///< the parent's own rotation over the same samples
     int n = 0;
   };
   bool estimate(int hinge, HingeEstimate& out) const;
 
   RigMapping rig_;
   HingeRefineOptions opt_;
-  std::array<Sums, kRefineHingeChildren.size()> sums_{};
-  std::array<HingeEstimate, kRefineHingeChildren.size()> est_{};
+  std::array<Sums, kRefinePairs.size()> sums_{};
+  std::array<HingeEstimate, kRefinePairs.size()> est_{};
   std::array<Eigen::Quaterniond, kSegmentCount> q_prev_;
   std::array<int64_t, kSegmentCount> t_prev_ns_{};
   std::array<bool, kSegmentCount> have_prev_{};
