@@ -38,6 +38,7 @@ HingeAxisRefiner::HingeAxisRefiner(RigMapping rig, HingeRefineOptions options)
 void HingeAxisRefiner::reset() {
   sums_.fill(Sums{});
   est_.fill(HingeEstimate{});
+  n_estimated_.fill(0);
   q_prev_.fill(Eigen::Quaterniond::Identity());
   t_prev_ns_.fill(0);
   have_prev_.fill(false);
@@ -173,9 +174,14 @@ bool HingeAxisRefiner::update(int64_t t_ns) {
   double sum = 0;
   int n = 0;
   for (size_t h = 0; h < kRefinePairs.size(); ++h) {
-    HingeEstimate e;
-    e.valid = estimate(static_cast<int>(h), e);
-    est_[h] = e;
+    // Re-estimate only pairs with new data (the search is ~10^4 cost evaluations).
+    if (sums_[h].n != n_estimated_[h]) {
+      HingeEstimate e;
+      e.valid = estimate(static_cast<int>(h), e);
+      est_[h] = e;
+      n_estimated_[h] = sums_[h].n;
+    }
+    const HingeEstimate& e = est_[h];
     if (!e.valid) continue;
     const int c = index(kRefinePairs[h].child);
     const int p = index(kRefinePairs[h].parent);

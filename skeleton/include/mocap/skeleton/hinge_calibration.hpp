@@ -130,6 +130,7 @@ class HingeAxisRefiner {
   HingeRefineOptions opt_;
   std::array<Sums, kRefinePairs.size()> sums_{};
   std::array<HingeEstimate, kRefinePairs.size()> est_{};
+  std::array<int, kRefinePairs.size()> n_estimated_{};  ///< sums_[h].n at the last estimate
   std::array<Eigen::Quaterniond, kSegmentCount> q_prev_;
   std::array<int64_t, kSegmentCount> t_prev_ns_{};
   std::array<bool, kSegmentCount> have_prev_{};
