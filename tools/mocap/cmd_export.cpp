@@ -18,7 +18,7 @@
 namespace mocap::cmd {
 namespace {
 
-constexpr const char* kUsage =
+constexpr const char* kExportUsage =
     "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh)\n"
     "Converts the poses recorded in SESSION. CSV columns: t (seconds since the recording\n"
     "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n"
@@ -142,15 +142,15 @@ int run_export(int argc, char** argv) {
       .option("bvh", "write the poses as BVH to this file")
       .flag("help", "show this help");
   if (!args.parse(argc, argv, 1)) {
-    std::fprintf(stderr, "mocap export: %s\n%s", args.error().c_str(), kUsage);
+    std::fprintf(stderr, "mocap export: %s\n%s", args.error().c_str(), kExportUsage);
     return 2;
   }
   if (args.has("help")) {
-    std::printf("%s%s", kUsage, args.help().c_str());
+    std::printf("%s%s", kExportUsage, args.help().c_str());
     return 0;
   }
   if (args.positional().size() != 1 || args.has("csv") == args.has("bvh")) {
-    std::fprintf(stderr, "%s", kUsage);
+    std::fprintf(stderr, "%s", kExportUsage);
     return 2;
   }
   const std::string in = args.positional()[0];
