@@ -1,5 +1,5 @@
-// Joint rotations to a PoseFrame (through the skeleton's forward kinematics) and the rest pose, for the
-// viewer's procedural and file sources.
+// Joint rotations to a PoseFrame (through the skeleton's forward kinematics) and the rest pose,
+// for the viewer's procedural and file sources.
 #include "mocap/viewer/pose_source.hpp"
 
 #include "mocap/skeleton/forward_kinematics.hpp"
