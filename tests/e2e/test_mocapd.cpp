@@ -334,8 +334,10 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
     const auto z = [&](const char* n) { return seg.at(n)["p"][2].get<double>(); };
     EXPECT_GT(z("head") - z("pelvis"), 0.35) << l.dump();
     for (const char* foot : {"foot_l", "foot_r"}) {
-      EXPECT_LT(z(foot) - z("pelvis"), -0.6) << l.dump();
-      EXPECT_LT(z(foot), 0.25) << l.dump();
+      // Near the floor: the performer may already be walking (a loaded machine reads these
+      // lines later), and a swing foot rises up to about 0.3 m.
+      EXPECT_LT(z(foot) - z("pelvis"), -0.5) << l.dump();
+      EXPECT_LT(z(foot), 0.4) << l.dump();
       EXPECT_GT(z(foot), -0.1) << l.dump();
     }
     // Pelvis up axis (third column of its rotation) within 30 degrees of earth up.
