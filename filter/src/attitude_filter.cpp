@@ -62,6 +62,8 @@ void AttitudeFilter::refresh_coeffs() {
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
   c_.k_hard_iron = p_.hard_iron_tau_s > 0 ? std::exp(-c_.mag_ts_s / p_.hard_iron_tau_s) : 0.0;
   c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
+  c_.k_latency = filt::gain_from_tau(p_.mag_latency_tau_s, c_.mag_ts_s);
+  c_.k_latency_hp = filt::gain_from_tau(p_.mag_latency_hp_tau_s, c_.mag_ts_s);
 
   // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
   c_.bias_decim = std::max(1, static_cast<int>(std::lround(0.01 / c_.acc_ts_s)));
@@ -76,6 +78,14 @@ void AttitudeFilter::refresh_coeffs() {
   c_.bias_vertical_w = c_.bias_motion_w / std::max(p_.bias_vertical_forgetting, 1e-10);
   const double p_rest = sq(p_.bias_sigma_rest_deg_s * 100.0);
   c_.bias_rest_w = sq(p_rest) / c_.bias_v + p_rest;
+  // Gyro-gain KF: every gain_decim bias steps (about 25 Hz; the residual is low-passed with
+  // tau_acc, so sub-sampling it loses little), in gain units; the measurement noise is the
+  // motion bias update's per step, in (rad/s)^2.
+  c_.gain_decim = std::max(1, static_cast<int>(std::lround(0.04 / c_.bias_ts_s)));
+  const double gain_ts = c_.gain_decim * c_.bias_ts_s;
+  c_.gain_p0 = sq(p_.gyr_gain_sigma_init);
+  c_.gain_v = sq(1e-3) * gain_ts / std::max(p_.gyr_gain_forgetting_time_s, 1e-9);
+  c_.gain_w = c_.bias_motion_w * sq(0.01 * kDeg);
 }
 
 // Period of one stream from its timestamps. Returns false (and counts) for a timestamp that
@@ -159,8 +169,11 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
   st_.last_gyr_rad_s = gyr;
   if (dt_s <= 0) return;  // first sample: nothing to integrate yet
   const double t = std::min(dt_s, p_.max_gap_s);
-  // Exact quaternion exponential of the bias-corrected rate held over the period.
-  const Eigen::Vector3d w = gyr - st_.bias_rad_s;
+  // Exact quaternion exponential of the bias- and gain-corrected rate held over the period.
+  Eigen::Vector3d w = gyr - st_.bias_rad_s;
+  if (p_.gyr_gain_sigma_init > 0) {
+    w -= gyro_gain() * w;
+  }
   const double n = w.norm();
   const double angle = n * t;
   if (angle > 1e-12) {
@@ -169,6 +182,7 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
     st_.q_gyr = st_.q_gyr * dq;
     st_.q_gyr.normalize();
   }
+  st_.w_i_rad_s = st_.q_gyr * w;
   // Heading uncertainty grows with the bias uncertainty (about the vertical) over time.
   const double sb_rad_s = std::sqrt(std::max(st_.bias_p(2, 2), 0.0)) * 0.01 * kDeg;
   st_.delta_var_rad2 += sb_rad_s * sb_rad_s * t + 1e-7 * t;
@@ -190,7 +204,8 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
     if (st_.rest_t_s >= p_.rest_min_t_s) st_.rest = true;
   }
 
-  // Acc into the almost-inertial frame, low-pass, then into the 6D earth frame.
+  // Low-pass in the almost-inertial frame, then into the 6D earth frame.
+  // Acc into the almost-inertial frame.
   const Eigen::Vector3d acc_i = st_.q_gyr * acc;
   const auto& f = st_.acc_lp.step(acc_i.data(), c_.acc_lp, p_.tau_acc_s, ts);
   Eigen::Vector3d acc_f(f[0], f[1], f[2]);
@@ -220,10 +235,12 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   st_.q_acc.normalize();
 
   st_.bias_corr_sum += acc_e.head<2>();
+  st_.gyr_sum_rad_s += st_.last_gyr_rad_s;
   if (++st_.bias_n >= c_.bias_decim) {
     update_bias(Eigen::Vector3d(st_.bias_corr_sum.x(), st_.bias_corr_sum.y(), 1.0), c_.bias_ts_s);
     st_.bias_n = 0;
     st_.bias_corr_sum.setZero();
+    st_.gyr_sum_rad_s.setZero();
   }
 }
 
@@ -236,6 +253,24 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   const Eigen::Matrix3d r6 = (st_.q_acc * st_.q_gyr).toRotationMatrix();
   Eigen::Matrix3d r_lp = Eigen::Matrix3d::Identity();
   Eigen::Vector2d rb_lp = Eigen::Vector2d::Zero();
+  const bool gain_on = p_.gyr_gain_sigma_init > 0 && p_.motion_bias_est;
+  Eigen::Matrix<double, 2, 9> reg = Eigen::Matrix<double, 2, 9>::Zero();
+  // The error the current estimates remove: bias plus gain times the block's mean rate.
+  Eigen::Vector3d b_applied = st_.bias_rad_s;
+  if (gain_on) {
+    const Eigen::Vector3d w = st_.gyr_sum_rad_s / c_.bias_decim - st_.bias_rad_s;
+    b_applied += gyro_gain() * w;
+    // Regressor of G (row-major entries ij) in the horizontal rows r: R_ri w_j.
+    double g[18];
+    for (int r = 0; r < 2; ++r)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          g[9 * r + 3 * i + j] = r6(r, i) * w(j);
+    const auto& gl = st_.gain_reg_lp.step(g, c_.bias_lp, p_.tau_acc_s, ts);
+    for (int r = 0; r < 2; ++r)
+      for (int k = 0; k < 9; ++k)
+        reg(r, k) = gl[9 * r + k];
+  }
   if (p_.motion_bias_est) {
     // Row-major copy so the 9 channels are the rows of R.
     double rr[9];
@@ -246,7 +281,7 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         r_lp(i, j) = rl[3 * i + j];
-    const double rb[2] = {r6.row(0).dot(st_.bias_rad_s), r6.row(1).dot(st_.bias_rad_s)};
+    const double rb[2] = {r6.row(0).dot(b_applied), r6.row(1).dot(b_applied)};
     const auto& bl = st_.motion_bias_lp.step(rb, c_.bias_lp, p_.tau_acc_s, ts);
     rb_lp = Eigen::Vector2d(bl[0], bl[1]);
   }
@@ -262,6 +297,14 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
     e.x() = -acc_e.y() / ts + rb_lp.x() - r_lp.row(0).dot(b);
     e.y() = acc_e.x() / ts + rb_lp.y() - r_lp.row(1).dot(b);
     e.z() = -r_lp.row(2).dot(b);
+    if (gain_on) {
+      e.head<2>() -= reg * st_.gain;
+      if (++st_.gain_n >= c_.gain_decim) {
+        st_.gain_n = 0;
+        const double clip = p_.bias_clip_deg_s * kDeg;
+        update_gain(e.head<2>().cwiseMax(-clip).cwiseMin(clip), reg, r_lp);
+      }
+    }
     cm = r_lp;
     w = Eigen::Vector3d(c_.bias_motion_w, c_.bias_motion_w, c_.bias_vertical_w);
   } else {
@@ -277,6 +320,32 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   const Eigen::Matrix3d k = st_.bias_p * cm.transpose() * s.inverse();
   st_.bias_rad_s = (st_.bias_rad_s + k * e).cwiseMax(-clip).cwiseMin(clip);
   st_.bias_p -= k * cm * st_.bias_p;
+}
+
+// Gyro-gain Kalman update: residual = reg * (G - G_est) + bias error + noise (rad/s).
+void AttitudeFilter::update_gain(const Eigen::Vector2d& residual,
+                                 const Eigen::Matrix<double, 2, 9>& reg,
+                                 const Eigen::Matrix3d& r_lp) {
+  if (!st_.gain_p_init) {
+    st_.gain_p = Eigen::Matrix<double, 9, 9>::Identity() * c_.gain_p0;
+    st_.gain_p_init = true;
+  }
+  for (int i = 0; i < 9; ++i)
+    if (st_.gain_p(i, i) < c_.gain_p0) st_.gain_p(i, i) += c_.gain_v;
+  // Measurement noise: the motion update's plus the current bias uncertainty.
+  const Eigen::Matrix<double, 2, 3> cb = r_lp.topRows<2>() * (0.01 * kDeg);
+  Eigen::Matrix2d s = cb * st_.bias_p * cb.transpose();
+  s.diagonal().array() += c_.gain_w;
+  const Eigen::Matrix<double, 9, 2> ph = st_.gain_p * reg.transpose();
+  s += reg * ph;
+  const Eigen::Matrix<double, 9, 2> k = ph * s.inverse();
+  const double clip = p_.gyr_gain_clip;
+  st_.gain = (st_.gain + k * residual).cwiseMax(-clip).cwiseMin(clip);
+  st_.gain_p -= k * ph.transpose();
+}
+
+Eigen::Matrix3d AttitudeFilter::gyro_gain() const {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(st_.gain.data());
 }
 
 // Exponentially weighted least squares for (c, h) in R m = c + R h, R = rotation of q_gyr.
@@ -314,8 +383,15 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   if (p_.hard_iron_tau_s > 0) update_hard_iron(mag_raw);
   const Eigen::Vector3d mag =
       st_.hard_iron_valid ? Eigen::Vector3d(mag_raw - st_.hard_iron_uT) : mag_raw;
-  const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
-  const Eigen::Vector3d m_e = q6 * mag;
+  // Into the almost-inertial frame, compensated for the latency behind the gyro.
+  Eigen::Vector3d m_i = st_.q_gyr * mag;
+  if (p_.mag_latency_tau_s > 0) {
+    st_.mag_latency.step(m_i, st_.w_i_rad_s, c_.k_latency_hp, c_.k_latency);
+    const double l =
+        st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kDeg, p_.mag_latency_max_s);
+    m_i -= l * st_.w_i_rad_s.cross(m_i);
+  }
+  const Eigen::Vector3d m_e = st_.q_acc * m_i;
 
   if (p_.mag_dist_rejection) {
     const double n = m_e.norm();
@@ -365,7 +441,6 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
   if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
     // Gyro-consistency: the field in the almost-inertial frame must stay put.
-    const Eigen::Vector3d m_i = st_.q_gyr * mag;
     if (!st_.mag_i_init) {
       st_.mag_i_mean = m_i;
       st_.mag_i_init = true;
