@@ -44,6 +44,7 @@ void AttitudeFilter::set_state(const FilterState& s) {
 }
 
 void AttitudeFilter::refresh_coeffs() {
+  auto sq = [](double x) { return x * x; };
   // Sampling periods: tracked per stream; before a stream's second sample borrow another's.
   const double fallback = st_.gyr_ts_nom_s > 0   ? st_.gyr_ts_nom_s
                           : st_.acc_ts_nom_s > 0 ? st_.acc_ts_nom_s
@@ -59,6 +60,11 @@ void AttitudeFilter::refresh_coeffs() {
   c_.rest_acc_lp = filt::butterworth(p_.rest_filter_tau_s, c_.acc_ts_s);
   c_.mag_norm_dip_lp = filt::butterworth(p_.mag_current_tau_s, c_.mag_ts_s);
   c_.k_mag = filt::gain_from_tau(p_.tau_mag_s, c_.mag_ts_s);
+  // Kalman heading: q = sigma^2 / tau, r = sigma^2 tau / T gives the time constant tau_mag
+  // and the steady-state one-sigma heading_sigma_deg in an undisturbed field, at any rate.
+  const double sh2 = sq(p_.heading_sigma_deg * kDeg);
+  c_.heading_q_rad2_s = sh2 / std::max(p_.tau_mag_s, 1e-9);
+  c_.heading_r0_rad2 = sh2 * p_.tau_mag_s / c_.mag_ts_s;
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
   c_.k_hard_iron = p_.hard_iron_tau_s > 0 ? std::exp(-c_.mag_ts_s / p_.hard_iron_tau_s) : 0.0;
   c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
@@ -70,7 +76,6 @@ void AttitudeFilter::refresh_coeffs() {
   c_.bias_ts_s = c_.bias_decim * c_.acc_ts_s;
   c_.bias_lp = filt::butterworth(p_.tau_acc_s, c_.bias_ts_s);
   // Bias KF in units of (0.01 deg/s)^2: uncertainty grows by 0.1 deg/s per forgetting time.
-  auto sq = [](double x) { return x * x; };
   c_.bias_p0 = sq(p_.bias_sigma_init_deg_s * 100.0);
   c_.bias_v = sq(0.1 * 100.0) * c_.bias_ts_s / p_.bias_forgetting_time_s;
   const double p_motion = sq(p_.bias_sigma_motion_deg_s * 100.0);
@@ -78,10 +83,10 @@ void AttitudeFilter::refresh_coeffs() {
   c_.bias_vertical_w = c_.bias_motion_w / std::max(p_.bias_vertical_forgetting, 1e-10);
   const double p_rest = sq(p_.bias_sigma_rest_deg_s * 100.0);
   c_.bias_rest_w = sq(p_rest) / c_.bias_v + p_rest;
-  // Gyro-gain KF: every gain_decim bias steps (about 25 Hz; the residual is low-passed with
+  // Gyro-gain KF: every gain_decim bias steps (about 10 Hz; the residual is low-passed with
   // tau_acc, so sub-sampling it loses little), in gain units; the measurement noise is the
   // motion bias update's per step, in (rad/s)^2.
-  c_.gain_decim = std::max(1, static_cast<int>(std::lround(0.04 / c_.bias_ts_s)));
+  c_.gain_decim = std::max(1, static_cast<int>(std::lround(0.1 / c_.bias_ts_s)));
   const double gain_ts = c_.gain_decim * c_.bias_ts_s;
   c_.gain_p0 = sq(p_.gyr_gain_sigma_init);
   c_.gain_v = sq(1e-3) * gain_ts / std::max(p_.gyr_gain_forgetting_time_s, 1e-9);
@@ -182,10 +187,6 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
     st_.q_gyr = st_.q_gyr * dq;
     st_.q_gyr.normalize();
   }
-  st_.w_i_rad_s = st_.q_gyr * w;
-  // Heading uncertainty grows with the bias uncertainty (about the vertical) over time.
-  const double sb_rad_s = std::sqrt(std::max(st_.bias_p(2, 2), 0.0)) * 0.01 * kDeg;
-  st_.delta_var_rad2 += sb_rad_s * sb_rad_s * t + 1e-7 * t;
 }
 
 void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
@@ -383,15 +384,16 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   if (p_.hard_iron_tau_s > 0) update_hard_iron(mag_raw);
   const Eigen::Vector3d mag =
       st_.hard_iron_valid ? Eigen::Vector3d(mag_raw - st_.hard_iron_uT) : mag_raw;
-  // Into the almost-inertial frame, compensated for the latency behind the gyro.
-  Eigen::Vector3d m_i = st_.q_gyr * mag;
+  // Into the 6D earth frame, compensated for the latency behind the gyro: a field read L
+  // late is the current one rotated by w L, so v = q6 (w x m) is its rate of change there.
+  const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
+  Eigen::Vector3d m_e = q6 * mag;
   if (p_.mag_latency_tau_s > 0) {
-    st_.mag_latency.step(m_i, st_.w_i_rad_s, c_.k_latency_hp, c_.k_latency);
-    const double l =
-        st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kDeg, p_.mag_latency_max_s);
-    m_i -= l * st_.w_i_rad_s.cross(m_i);
+    const Eigen::Vector3d v_e = q6 * (st_.last_gyr_rad_s - st_.bias_rad_s).cross(mag);
+    st_.mag_latency.step(m_e, v_e, c_.k_latency_hp, c_.k_latency);
+    m_e -=
+        st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kDeg, p_.mag_latency_max_s) * v_e;
   }
-  const Eigen::Vector3d m_e = st_.q_acc * m_i;
 
   if (p_.mag_dist_rejection) {
     const double n = m_e.norm();
@@ -441,6 +443,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
   if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
     // Gyro-consistency: the field in the almost-inertial frame must stay put.
+    const Eigen::Vector3d m_i = st_.q_gyr * mag;
     if (!st_.mag_i_init) {
       st_.mag_i_mean = m_i;
       st_.mag_i_init = true;
@@ -449,19 +452,32 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     st_.mag_i_mean += c_.k_mag_consistency * dev;
     st_.mag_i_var_rel +=
         c_.k_mag_consistency * (dev.squaredNorm() / m_i.squaredNorm() - st_.mag_i_var_rel);
-    if (st_.mag_i_var_rel > p_.mag_consistency_th * p_.mag_consistency_th) {
-      st_.mag_disturbed = true;
-      st_.mag_undisturbed_t_s = 0;
-    }
   }
-  double k = c_.k_mag;
+  // Kalman heading. Predict: the heading drifts by the nominal process noise plus what the
+  // gyro-bias uncertainty allows. Measurement variance: nominal (steady state = tau_mag),
+  // inflated by the squared disturbance indicators, each relative to its threshold.
+  const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
+  st_.delta_var_rad2 += (c_.heading_q_rad2_s + sb2) * ts;
+  double r = c_.heading_r0_rad2;
+  if (p_.mag_dist_rejection && st_.mag_ref_norm > 0) {
+    const double dn =
+        (st_.mag_norm_dip[0] - st_.mag_ref_norm) / (p_.mag_norm_th * st_.mag_ref_norm);
+    const double dd = (st_.mag_norm_dip[1] - st_.mag_ref_dip) / (p_.mag_dip_th_deg * kDeg);
+    double score = p_.mag_trust_weight * (dn * dn + dd * dd);
+    if (p_.mag_consistency_th > 0)
+      score += st_.mag_i_var_rel / (p_.mag_consistency_th * p_.mag_consistency_th);
+    // A field that was rejected recently is trusted less until the rejection budget is repaid.
+    score += st_.mag_reject_t_s / p_.tau_mag_s;
+    r *= 1.0 + score;
+  }
+  double k = st_.delta_var_rad2 / (st_.delta_var_rad2 + r);
   if (p_.mag_dist_rejection) {
     if (st_.mag_disturbed) {
       if (st_.mag_reject_t_s <= p_.mag_max_rejection_time_s) {
         st_.mag_reject_t_s += ts;
         k = 0;
       } else {
-        k /= p_.mag_rejection_factor;
+        k = std::min(k, c_.k_mag) / p_.mag_rejection_factor;  // backstop: nominal gain at most
       }
     } else {
       st_.mag_reject_t_s = std::max(st_.mag_reject_t_s - p_.mag_rejection_factor * ts, 0.0);
@@ -474,9 +490,8 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   }
   (void)dt_s;
   st_.delta_rad = wrap_pi(st_.delta_rad + k * err);
-  // Variance after a first-order update with gain k and a (2 deg)^2 measurement variance.
-  constexpr double kMeasVar = (2 * kDeg) * (2 * kDeg);
-  st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * kMeasVar;
+  // Joseph form: valid for the gains the rejection and start-up rules impose as well.
+  st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * r;
   st_.q_delta = heading_quat(st_.delta_rad);
 }
 

@@ -23,6 +23,8 @@ struct Entry {
   }
 const Entry kEntries[] = {D(tau_acc_s),
                           D(tau_mag_s),
+                          D(heading_sigma_deg),
+                          D(mag_trust_weight),
                           D(tau_acc_fast_s),
                           D(acc_dyn_ref_rad_s_per_m_s2),
                           D(acc_dyn_tau_s),

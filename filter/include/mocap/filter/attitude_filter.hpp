@@ -20,6 +20,9 @@ struct FilterParams {
   // --- inclination and heading ---
   double tau_acc_s = 3.0;  ///< low-pass of acc in the almost-inertial frame (inclination)
   double tau_mag_s = 9.0;  ///< nominal heading time constant in an undisturbed field
+  /// Kalman heading: steady-state one-sigma heading uncertainty in an undisturbed field (sets
+  /// the process and measurement noise together with tau_mag_s).
+  double heading_sigma_deg = 1.0;
   /// Adaptive inclination: a second, faster low-pass (tau_acc_fast_s) is blended in when
   /// gyro errors (which grow with the rotation rate w) outweigh linear-acceleration errors
   /// (which grow with the linear acceleration a). Fast weight: rho^2 / (rho^2 + rho_ref^2),
@@ -64,13 +67,17 @@ struct FilterParams {
   double mag_min_undisturbed_time_s = 0.5;
   double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
   double mag_rejection_factor = 2.0;       ///< gain divisor after that
+  /// Soft trust: the heading measurement variance is multiplied by 1 + score, score =
+  /// mag_trust_weight * ((norm dev / mag_norm_th)^2 + (dip dev / mag_dip_th_deg)^2)
+  /// + (rejection time not yet repaid) / tau_mag_s (+ the consistency term below).
+  double mag_trust_weight = 3.0;
   // --- extensions beyond VQF (false/0 = plain VQF behaviour) ---
   /// Gyro-consistency test: in a homogeneous field the magnetometer vector seen in the
   /// almost-inertial frame (gyro only, no inclination involved) stays constant. Its RMS
-  /// deviation from its own mean over mag_consistency_tau_s, relative to the field norm, above
-  /// this threshold marks the field as disturbed (gradients, magnets moving with the sensor).
-  /// 0 disables: the default, because on BROAD rejecting more often cost more accuracy (fast
-  /// rotation needs magnetometer updates) than it saved; kept for experiments.
+  /// deviation from its own mean over mag_consistency_tau_s, relative to the field norm and
+  /// to this threshold, squared, adds to the soft-trust score (gradients, magnets moving with
+  /// the sensor). 0 disables: the default, because on BROAD distrusting the field more often
+  /// cost more accuracy (fast rotation needs magnetometer updates) than it saved.
   double mag_consistency_th = 0.0;
   double mag_consistency_tau_s = 1.0;  ///< averaging window of that test
   /// Online hard-iron estimation (a sensor-fixed field offset h, e.g. a magnet on the housing):
@@ -123,7 +130,7 @@ struct FilterCoeffs {
   filt::LowpassCoeffs bias_lp;  ///< tau_acc low-pass at the bias KF rate
   double bias_p0 = 0, bias_v = 0, bias_motion_w = 0, bias_vertical_w = 0, bias_rest_w = 0;
   double heading_q_rad2_s = 0, heading_r0_rad2 = 0;
-  int gain_decim = 1;  ///< gyro-gain KF runs every gain_decim bias steps (about 25 Hz)
+  int gain_decim = 1;  ///< gyro-gain KF runs every gain_decim bias steps (about 10 Hz)
   double gain_p0 = 0, gain_v = 0, gain_w = 0;
 };
 
@@ -138,7 +145,6 @@ struct FilterState {
   int64_t t_gyr_ns = 0, t_acc_ns = 0, t_mag_ns = 0;
   double gyr_ts_nom_s = 0, acc_ts_nom_s = 0, mag_ts_nom_s = 0;  ///< tracked sampling periods
   Eigen::Vector3d last_gyr_rad_s = Eigen::Vector3d::Zero();
-  Eigen::Vector3d w_i_rad_s = Eigen::Vector3d::Zero();  ///< corrected rate, almost-inertial
   filt::LatencyEstimator mag_latency;
   // inclination
   filt::Lowpass<3> acc_lp, acc_fast_lp;
