@@ -87,6 +87,8 @@ void AttitudeFilter::refresh_coeffs() {
   // tau_acc, so sub-sampling it loses little), in gain units; the measurement noise is the
   // motion bias update's per step, in (rad/s)^2.
   c_.gain_decim = std::max(1, static_cast<int>(std::lround(0.1 / c_.bias_ts_s)));
+  c_.gain_reg_decim = std::max(1, static_cast<int>(std::lround(0.04 / c_.bias_ts_s)));
+  c_.gain_reg_lp = filt::butterworth(p_.tau_acc_s, c_.gain_reg_decim * c_.bias_ts_s);
   const double gain_ts = c_.gain_decim * c_.bias_ts_s;
   c_.gain_p0 = sq(p_.gyr_gain_sigma_init);
   c_.gain_v = sq(1e-3) * gain_ts / std::max(p_.gyr_gain_forgetting_time_s, 1e-9);
@@ -255,23 +257,32 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   Eigen::Matrix3d r_lp = Eigen::Matrix3d::Identity();
   Eigen::Vector2d rb_lp = Eigen::Vector2d::Zero();
   const bool gain_on = p_.gyr_gain_sigma_init > 0 && p_.motion_bias_est;
-  Eigen::Matrix<double, 2, 9> reg = Eigen::Matrix<double, 2, 9>::Zero();
   // The error the current estimates remove: bias plus gain times the block's mean rate.
   Eigen::Vector3d b_applied = st_.bias_rad_s;
   if (gain_on) {
     const Eigen::Vector3d w = st_.gyr_sum_rad_s / c_.bias_decim - st_.bias_rad_s;
     b_applied += gyro_gain() * w;
-    // Regressor of G (row-major entries ij) in the horizontal rows r: R_ri w_j.
-    double g[18];
+    // Regressor of G (row-major entries ij) in the horizontal rows r: R_ri w_j, summed and
+    // low-passed every gain_reg_decim steps (about 25 Hz; tau_acc is seconds).
     for (int r = 0; r < 2; ++r)
       for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          g[9 * r + 3 * i + j] = r6(r, i) * w(j);
-    const auto& gl = st_.gain_reg_lp.step(g, c_.bias_lp, p_.tau_acc_s, ts);
-    for (int r = 0; r < 2; ++r)
-      for (int k = 0; k < 9; ++k)
-        reg(r, k) = gl[9 * r + k];
+        st_.gain_reg_sum.block<1, 3>(r, 3 * i) += r6(r, i) * w.transpose();
+    if (++st_.gain_reg_n >= c_.gain_reg_decim) {
+      double g[18];
+      const double inv = 1.0 / st_.gain_reg_n;
+      for (int r = 0; r < 2; ++r)
+        for (int k = 0; k < 9; ++k)
+          g[9 * r + k] = st_.gain_reg_sum(r, k) * inv;
+      const auto& gl =
+          st_.gain_reg_lp.step(g, c_.gain_reg_lp, p_.tau_acc_s, ts * c_.gain_reg_decim);
+      for (int r = 0; r < 2; ++r)
+        for (int k = 0; k < 9; ++k)
+          st_.gain_reg(r, k) = gl[9 * r + k];
+      st_.gain_reg_sum.setZero();
+      st_.gain_reg_n = 0;
+    }
   }
+  const Eigen::Matrix<double, 2, 9>& reg = st_.gain_reg;
   if (p_.motion_bias_est) {
     // Row-major copy so the 9 channels are the rows of R.
     double rr[9];

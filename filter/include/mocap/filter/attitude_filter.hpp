@@ -130,6 +130,8 @@ struct FilterCoeffs {
   filt::LowpassCoeffs bias_lp;  ///< tau_acc low-pass at the bias KF rate
   double bias_p0 = 0, bias_v = 0, bias_motion_w = 0, bias_vertical_w = 0, bias_rest_w = 0;
   double heading_q_rad2_s = 0, heading_r0_rad2 = 0;
+  int gain_reg_decim = 1;  ///< its regressor is low-passed every gain_reg_decim bias steps
+  filt::LowpassCoeffs gain_reg_lp;
   int gain_decim = 1;  ///< gyro-gain KF runs every gain_decim bias steps (about 10 Hz)
   double gain_p0 = 0, gain_v = 0, gain_w = 0;
 };
@@ -165,7 +167,10 @@ struct FilterState {
   bool gain_p_init = false;
   int gain_n = 0;                                           ///< bias steps since the last
   Eigen::Vector3d gyr_sum_rad_s = Eigen::Vector3d::Zero();  ///< gyro summed over a bias block
-  filt::Lowpass<18> gain_reg_lp;  ///< low-passed regressor R_ri w_j, rows 0 and 1 of R
+  filt::Lowpass<18> gain_reg_lp;  ///< low-pass of the regressor R_ri w_j, rows 0 and 1 of R
+  Eigen::Matrix<double, 2, 9> gain_reg = Eigen::Matrix<double, 2, 9>::Zero();      ///< its output
+  Eigen::Matrix<double, 2, 9> gain_reg_sum = Eigen::Matrix<double, 2, 9>::Zero();  ///< block sum
+  int gain_reg_n = 0;
   // rest
   bool rest = false;
   double rest_t_s = 0;
