@@ -468,7 +468,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   // gyro-bias uncertainty allows. Measurement variance: nominal (steady state = tau_mag),
   // inflated by the squared disturbance indicators, each relative to its threshold.
   const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
-  st_.delta_var_rad2 += (c_.heading_q_rad2_s + sb2) * ts;
+  st_.delta_var_rad2 += (c_.heading_q_rad2_s + sb2) * (dt_s > 0 ? dt_s : ts);  // real gap
   double r = c_.heading_r0_rad2;
   if (p_.mag_dist_rejection && st_.mag_ref_norm > 0) {
     const double dn =
@@ -499,7 +499,6 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     st_.k_mag_init = st_.k_mag_init / (st_.k_mag_init + 1);
     if (st_.k_mag_init * p_.tau_mag_s < ts) st_.k_mag_init = 0;
   }
-  (void)dt_s;
   st_.delta_rad = wrap_pi(st_.delta_rad + k * err);
   // Joseph form: valid for the gains the rejection and start-up rules impose as well.
   st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * r;
@@ -517,7 +516,10 @@ Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
 
 double AttitudeFilter::heading_sigma_rad() const {
   if (!st_.have_mag) return kPi;
-  return std::sqrt(std::max(st_.delta_var_rad2, 0.0));
+  // Predicted to the newest gyro sample (the magnetometer may be slower or missing).
+  const double since_mag_s = std::max(static_cast<double>(st_.t_gyr_ns - st_.t_mag_ns), 0.0) * 1e-9;
+  const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
+  return std::sqrt(std::max(st_.delta_var_rad2 + (c_.heading_q_rad2_s + sb2) * since_mag_s, 0.0));
 }
 
 }  // namespace mocap

@@ -13,7 +13,7 @@ namespace mocap::filt {
 
 /// Least squares of the high-passed x on the high-passed v (both normalised by |x|),
 /// exponentially weighted. latency_s() shrinks towards 0 while the rotation excitation
-/// is small compared to min_rate_rad_s.
+/// (RMS of the high-passed v) is below min_rate_rad_s.
 struct LatencyEstimator {
   Eigen::Vector3d x_mean = Eigen::Vector3d::Zero(), v_mean = Eigen::Vector3d::Zero();
   double sxv = 0, svv = 0;  ///< weighted sums (rad/s) and (rad/s)^2
@@ -40,7 +40,7 @@ struct LatencyEstimator {
   }
 
   double latency_s(double min_rate_rad_s, double max_s) const {
-    const double l = sxv / (svv + min_rate_rad_s * min_rate_rad_s);
+    const double l = sxv / std::max(svv, min_rate_rad_s * min_rate_rad_s);
     return std::clamp(l, -max_s, max_s);
   }
 };
