@@ -80,15 +80,18 @@ bool LineSensorPty::write_sample(uint64_t t_us, double phase) {
 }
 
 bool LineSensorPty::write_bytes(const std::string& bytes) {
+  std::lock_guard lock(mu_);  // the feeder thread writes while the test unplugs
   if (!pty_) return false;
   return pty_->write({reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()});
 }
 
 void LineSensorPty::vanish() {
+  std::lock_guard lock(mu_);
   pty_.reset();
 }
 
 void LineSensorPty::reappear() {
+  std::lock_guard lock(mu_);
   if (!pty_) pty_ = std::make_unique<PtyEndpoint>(link_);
 }
 

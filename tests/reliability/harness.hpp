@@ -54,6 +54,7 @@ class LineSensorPty {
 
  private:
   std::string link_;
+  std::mutex mu_;  // guards pty_
   std::unique_ptr<PtyEndpoint> pty_;
 };
 
