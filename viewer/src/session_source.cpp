@@ -64,9 +64,7 @@ int SessionSource::frame_at(double position_s) const {
 }
 
 bool SessionSource::poll(double t_s, std::vector<PoseFrame>& frames) {
-  if (!paused_) position_s_ += t_s - last_t_s_;
-  last_t_s_ = t_s;
-  const int k = frame_at(position_s_);
+  const int k = frame_at(advance(t_s));
   if (k == shown_ && !frames.empty()) return false;
   SessionReader::Block b;
   if (!reader_.seek(index_[k].offset) || !reader_.next(b) || b.type != session::BlockType::pose)

@@ -12,7 +12,7 @@
 
 namespace mocap::viewer {
 
-class SessionSource final : public PoseSource {
+class SessionSource final : public PlaybackSource {
  public:
   /// Opens and indexes the file; throws std::runtime_error naming the file and the problem (not
   /// a session, unsupported version, no pose frames). A torn or corrupt tail is not an error:
@@ -20,9 +20,6 @@ class SessionSource final : public PoseSource {
   explicit SessionSource(const std::string& path);
   bool poll(double t_s, std::vector<PoseFrame>& frames) override;
   std::string status() const override;
-  bool seekable() const override { return true; }
-  void set_paused(bool paused) override { paused_ = paused; }
-  void seek_by(double dt_s) override { position_s_ += dt_s; }
   const BodyDimensions* dimensions() const override { return &dims_; }
 
   int frame_count() const { return static_cast<int>(index_.size()); }
@@ -41,8 +38,6 @@ class SessionSource final : public PoseSource {
   BodyDimensions dims_;
   std::string tail_note_;
   double duration_s_ = 0;
-  bool paused_ = false;
-  double position_s_ = 0, last_t_s_ = 0;
   int shown_ = -1;
 };
 
