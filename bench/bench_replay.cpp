@@ -22,7 +22,7 @@
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/replay.hpp"
-#include "mocap/daemon/session_writer.hpp"
+#include "mocap/session/session_writer.hpp"
 #include "mocap/sim/performer.hpp"
 
 namespace mocap::bench {

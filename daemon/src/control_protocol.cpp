@@ -2,28 +2,21 @@
 // bounded length, exact command words and argument counts).
 #include <nlohmann/json.hpp>
 
+#include "mocap/core/text_check.hpp"
 #include "mocap/daemon/control.hpp"
 
 namespace mocap::daemon {
 
 namespace {
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t'))
-    s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t'))
-    s.remove_suffix(1);
-  return s;
-}
-
 std::string_view next_word(std::string_view& s) {
-  s = trim(s);
+  s = trim_blanks(s);
   size_t n = 0;
   while (n < s.size() && s[n] != ' ' && s[n] != '\t')
     ++n;
   std::string_view w = s.substr(0, n);
   s.remove_prefix(n);
-  s = trim(s);
+  s = trim_blanks(s);
   return w;
 }
 

@@ -100,8 +100,9 @@ void Daemon::wait(int extra_fd) {
     if (n > 0 && extra_fd >= 0 && (fds[1].revents & POLLIN)) return;
     update_device_counters();
     if (parts_.recorder) {
-      const std::string err = parts_.recorder->error();
+      // Under rec_mu_: the control thread replaces the recorder's writer on record start/stop.
       std::lock_guard lock(rec_mu_);
+      const std::string err = parts_.recorder->error();
       if (!err.empty() && !recording_path_.empty()) {
         log_.error("recording %s stopped: %s", recording_path_.c_str(), err.c_str());
         pipeline_->set_record_tap(nullptr);

@@ -1,6 +1,7 @@
 // Builds the live daemon's parts (engine, devices, demo, outputs, recorder) and runs the
 // daemon's replay mode.
 #include "mocap/daemon/daemon_setup.hpp"
+#include "mocap/daemon/prefetch_source.hpp"
 
 #include <poll.h>
 
@@ -50,7 +51,8 @@ Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log) {
 int run_replay_daemon(const std::string& path, double speed, const Config* rig, int signal_fd,
                       Logger& log) {
   try {
-    auto src = open_sample_source(path, rig);
+    std::unique_ptr<SampleSource> src =
+        std::make_unique<PrefetchSource>(open_sample_source(path, rig));
     Config cfg = src->config();
     RigEngine engine(cfg, &log);
     if (const std::string ct = src->calibration_text(); !ct.empty())

@@ -61,7 +61,10 @@ void Pipeline::on_sample(const ImuSample& sample) {
   if (sample.sensor_id >= slots_.size()) return;
   Slot& s = *slots_[sample.sensor_id];
   if (!s.ring.try_push(sample)) s.drops.fetch_add(1, std::memory_order_relaxed);
-  wake_.notify();
+  // Frames are built on the frame tick from the latest state, so the pipeline need not wake
+  // for every sample (20 sensors at 1 kHz would cost 20 000 wake-ups a second): it drains on
+  // the tick, or early when a ring is half full. Lowest-latency mode wakes it every time.
+  if (cfg_.publish_every_sample || s.ring.size() >= kRingCapacity / 2) wake_.notify();
 }
 
 void Pipeline::on_raw(uint16_t device_index, int64_t t_host_ns, std::span<const uint8_t> bytes) {

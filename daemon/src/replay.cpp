@@ -11,7 +11,7 @@
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/sample_csv.hpp"
-#include "mocap/daemon/session_reader.hpp"
+#include "mocap/session/session_reader.hpp"
 #include "mocap/drivers/device.hpp"
 
 namespace mocap::daemon {

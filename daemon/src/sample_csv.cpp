@@ -1,5 +1,6 @@
 // Strict line-by-line parser for CSV sample files (see sample_csv.hpp).
 #include "mocap/daemon/sample_csv.hpp"
+#include "mocap/core/text_check.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -12,14 +13,6 @@ constexpr std::string_view kFields[] = {"t",     "sensor", "gyr_x", "gyr_y", "gy
                                         "acc_y", "acc_z",  "mag_x", "mag_y", "mag_z"};
 constexpr int kFieldCount = 11;
 constexpr size_t kMaxLine = 4096;
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t'))
-    s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t'))
-    s.remove_suffix(1);
-  return s;
-}
 
 bool parse_double(std::string_view s, double& out) {
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
@@ -40,12 +33,12 @@ int SampleCsvParser::feed_line(std::string_view line, ImuSample& out) {
   if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
   if (line.size() > kMaxLine)
     return fail("line longer than " + std::to_string(kMaxLine) + " bytes");
-  if (trim(line).empty() || trim(line).front() == '#') return 0;
+  if (trim_blanks(line).empty() || trim_blanks(line).front() == '#') return 0;
   cells_.clear();
   for (size_t i = 0;;) {
     const size_t j = line.find(',', i);
     cells_.push_back(
-        trim(line.substr(i, j == std::string_view::npos ? std::string_view::npos : j - i)));
+        trim_blanks(line.substr(i, j == std::string_view::npos ? std::string_view::npos : j - i)));
     if (j == std::string_view::npos) break;
     i = j + 1;
     if (cells_.size() > 64) return fail("too many columns");

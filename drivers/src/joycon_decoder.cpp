@@ -6,6 +6,7 @@
 
 #include "decoder_common.hpp"
 #include "decoders.hpp"
+#include "mocap/core/units.hpp"
 #include "mocap/drivers/joycon.hpp"
 #include "protocols.hpp"
 
@@ -55,14 +56,13 @@ class JoyconDecoder final : public ProtocolDecoder {
     const int64_t reports_missing = first_ ? 0 : period_.update(t_report_ns - last_report_ns_);
     first_ = false;
     last_report_ns_ = t_report_ns;
-    constexpr double kDegToRad = M_PI / 180, kG = 9.80665;
     for (int i = 0; i < 3; ++i) {
       ImuSample s;
       const auto& m = full_.imu[i];
       for (int k = 0; k < 3; ++k) {
         const double sign = k == 0 ? 1.0 : yz_sign_;
-        s.acc_m_s2[k] = sign * acc_g(cal_, k, m.acc[k]) * kG;
-        s.gyr_rad_s[k] = sign * gyr_dps(cal_, k, m.gyr[k]) * kDegToRad;
+        s.acc_m_s2[k] = sign * acc_g(cal_, k, m.acc[k]) * kStandardGravity_m_s2;
+        s.gyr_rad_s[k] = sign * gyr_dps(cal_, k, m.gyr[k]) * kRadPerDeg;
       }
       s.valid = kFieldAcc | kFieldGyr;
       common_.emit(s, t_report_ns - (2 - i) * kImuSpacingNs, t_host_ns,
@@ -74,7 +74,7 @@ class JoyconDecoder final : public ProtocolDecoder {
 
  private:
   DecoderCommon common_;
-  Calibration cal_;
+  joycon::Calibration cal_;
   FullReport full_;
   Unwrapper timer_{256};
   PeriodTracker period_;

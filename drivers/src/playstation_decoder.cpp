@@ -5,6 +5,7 @@
 
 #include "decoder_common.hpp"
 #include "decoders.hpp"
+#include "mocap/core/units.hpp"
 #include "mocap/drivers/playstation.hpp"
 #include "protocols.hpp"
 
@@ -23,7 +24,7 @@ class PlaystationDecoder final : public ProtocolDecoder {
 
   void feed(std::span<const uint8_t> r, int64_t t_host_ns, SampleSink& sink) override {
     common_.stats.bytes += r.size();
-    Calibration c;
+    playstation::Calibration c;
     if (parse_calibration(model_, r, c)) {
       scale_ = scale_from(c);
       ++calibrations_;
@@ -42,10 +43,10 @@ class PlaystationDecoder final : public ProtocolDecoder {
     first_ = false;
     last_device_ns_ = t_device_ns;
     ImuSample s;
-    constexpr double kDegToRad = M_PI / 180, kG = 9.80665;
     for (int k = 0; k < 3; ++k) {
-      s.gyr_rad_s[k] = in_.gyr[k] * scale_.gyr_dps_per_lsb[k] * kDegToRad;
-      s.acc_m_s2[k] = (in_.acc[k] - scale_.acc_bias[k]) * scale_.acc_g_per_lsb[k] * kG;
+      s.gyr_rad_s[k] = in_.gyr[k] * scale_.gyr_dps_per_lsb[k] * kRadPerDeg;
+      s.acc_m_s2[k] =
+          (in_.acc[k] - scale_.acc_bias[k]) * scale_.acc_g_per_lsb[k] * kStandardGravity_m_s2;
     }
     s.valid = kFieldGyr | kFieldAcc;
     common_.emit(s, t_device_ns, t_host_ns, dropped, sink);

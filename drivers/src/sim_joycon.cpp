@@ -92,7 +92,7 @@ class JoyconEncoder final : public ProtocolEncoder {
 
  private:
   double rate_;
-  Calibration cal_;
+  joycon::Calibration cal_;
   double yz_sign_ = 1;
   uint8_t mode_ = 0x3F;
   bool imu_ = false;

@@ -5,19 +5,19 @@
 #include <stdexcept>
 #include <vector>
 
+#include "mocap/core/units.hpp"
 #include "mocap/drivers/sim_device.hpp"
 
 namespace mocap {
 namespace {
 
-constexpr double kG = 9.80665;
 const Eigen::Vector3d kField_uT(0.0, 20.0, -40.0);  // ENU earth field: north and down
 
 ImuSample from_orientation(const Eigen::Quaterniond& q_earth_sensor, const Eigen::Vector3d& gyr) {
   ImuSample s;
   s.q_device_sensor = q_earth_sensor;
   s.gyr_rad_s = gyr;
-  s.acc_m_s2 = q_earth_sensor.conjugate() * Eigen::Vector3d(0, 0, kG);
+  s.acc_m_s2 = q_earth_sensor.conjugate() * Eigen::Vector3d(0, 0, kStandardGravity_m_s2);
   s.mag_uT = q_earth_sensor.conjugate() * kField_uT;
   s.valid = kFieldGyr | kFieldAcc | kFieldMag | kFieldQuat;
   s.flags = kFlagSynthetic;

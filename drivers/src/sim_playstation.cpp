@@ -84,7 +84,7 @@ class PlaystationEncoder final : public ProtocolEncoder {
  private:
   double rate_;
   Model model_;
-  Calibration cal_;
+  playstation::Calibration cal_;
   Scale scale_;
   uint8_t seq_ = 0;
 };

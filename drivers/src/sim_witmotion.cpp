@@ -3,6 +3,7 @@
 // the unlock key first, as on current firmware).
 #include <cmath>
 
+#include "mocap/core/units.hpp"
 #include "mocap/drivers/witmotion.hpp"
 #include "sim_common.hpp"
 
@@ -10,7 +11,6 @@ namespace mocap {
 namespace {
 
 using namespace witmotion;
-constexpr double kG = 9.80665;
 
 class WitmotionEncoder final : public ProtocolEncoder {
  public:
@@ -34,7 +34,7 @@ class WitmotionEncoder final : public ProtocolEncoder {
              static_cast<int16_t>(mm | (ss << 8)), static_cast<int16_t>(ms % 1000)};
       witmotion::encode(p, out);
     }
-    if (rsw & rsw_bit(kAcc)) put(kAcc, s.acc_m_s2 * (32768.0 / (16 * kG)), out);
+    if (rsw & rsw_bit(kAcc)) put(kAcc, s.acc_m_s2 * (32768.0 / (16 * kStandardGravity_m_s2)), out);
     if (rsw & rsw_bit(kGyr)) put(kGyr, s.gyr_rad_s * (180 / M_PI) * (32768.0 / 2000), out);
     const auto& q = s.q_device_sensor;
     if (rsw & rsw_bit(kAngle)) {

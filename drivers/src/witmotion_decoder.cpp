@@ -5,13 +5,11 @@
 
 #include "decoder_common.hpp"
 #include "decoders.hpp"
+#include "mocap/core/units.hpp"
 #include "mocap/drivers/witmotion.hpp"
 
 namespace mocap {
 namespace {
-
-constexpr double kG = 9.80665;
-constexpr double kDegToRad = M_PI / 180.0;
 
 class WitmotionDecoder final : public ProtocolDecoder {
  public:
@@ -73,11 +71,11 @@ class WitmotionDecoder final : public ProtocolDecoder {
         break;
       }
       case kAcc:
-        s_.acc_m_s2 = Eigen::Vector3d(d[0], d[1], d[2]) * (16.0 * kG / 32768.0);
+        s_.acc_m_s2 = Eigen::Vector3d(d[0], d[1], d[2]) * (16.0 * kStandardGravity_m_s2 / 32768.0);
         s_.valid |= kFieldAcc;
         break;
       case kGyr:
-        s_.gyr_rad_s = Eigen::Vector3d(d[0], d[1], d[2]) * (2000.0 * kDegToRad / 32768.0);
+        s_.gyr_rad_s = Eigen::Vector3d(d[0], d[1], d[2]) * (2000.0 * kRadPerDeg / 32768.0);
         s_.valid |= kFieldGyr;
         break;
       case kMag:

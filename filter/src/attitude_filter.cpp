@@ -44,6 +44,7 @@ void AttitudeFilter::set_state(const FilterState& s) {
 }
 
 void AttitudeFilter::refresh_coeffs() {
+  auto sq = [](double x) { return x * x; };
   // Sampling periods: tracked per stream; before a stream's second sample borrow another's.
   const double fallback = st_.gyr_ts_nom_s > 0   ? st_.gyr_ts_nom_s
                           : st_.acc_ts_nom_s > 0 ? st_.acc_ts_nom_s
@@ -59,16 +60,22 @@ void AttitudeFilter::refresh_coeffs() {
   c_.rest_acc_lp = filt::butterworth(p_.rest_filter_tau_s, c_.acc_ts_s);
   c_.mag_norm_dip_lp = filt::butterworth(p_.mag_current_tau_s, c_.mag_ts_s);
   c_.k_mag = filt::gain_from_tau(p_.tau_mag_s, c_.mag_ts_s);
+  // Kalman heading: q = sigma^2 / tau, r = sigma^2 tau / T gives the time constant tau_mag
+  // and the steady-state one-sigma heading_sigma_deg in an undisturbed field, at any rate.
+  const double sh2 = sq(p_.heading_sigma_deg * kDeg);
+  c_.heading_q_rad2_s = sh2 / std::max(p_.tau_mag_s, 1e-9);
+  c_.heading_r0_rad2 = sh2 * p_.tau_mag_s / c_.mag_ts_s;
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
   c_.k_hard_iron = p_.hard_iron_tau_s > 0 ? std::exp(-c_.mag_ts_s / p_.hard_iron_tau_s) : 0.0;
   c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
+  c_.k_latency = filt::gain_from_tau(p_.mag_latency_tau_s, c_.mag_ts_s);
+  c_.k_latency_hp = filt::gain_from_tau(p_.mag_latency_hp_tau_s, c_.mag_ts_s);
 
   // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
   c_.bias_decim = std::max(1, static_cast<int>(std::lround(0.01 / c_.acc_ts_s)));
   c_.bias_ts_s = c_.bias_decim * c_.acc_ts_s;
   c_.bias_lp = filt::butterworth(p_.tau_acc_s, c_.bias_ts_s);
   // Bias KF in units of (0.01 deg/s)^2: uncertainty grows by 0.1 deg/s per forgetting time.
-  auto sq = [](double x) { return x * x; };
   c_.bias_p0 = sq(p_.bias_sigma_init_deg_s * 100.0);
   c_.bias_v = sq(0.1 * 100.0) * c_.bias_ts_s / p_.bias_forgetting_time_s;
   const double p_motion = sq(p_.bias_sigma_motion_deg_s * 100.0);
@@ -76,6 +83,16 @@ void AttitudeFilter::refresh_coeffs() {
   c_.bias_vertical_w = c_.bias_motion_w / std::max(p_.bias_vertical_forgetting, 1e-10);
   const double p_rest = sq(p_.bias_sigma_rest_deg_s * 100.0);
   c_.bias_rest_w = sq(p_rest) / c_.bias_v + p_rest;
+  // Gyro-gain KF: every gain_decim bias steps (about 10 Hz; the residual is low-passed with
+  // tau_acc, so sub-sampling it loses little), in gain units; the measurement noise is the
+  // motion bias update's per step, in (rad/s)^2.
+  c_.gain_decim = std::max(1, static_cast<int>(std::lround(0.1 / c_.bias_ts_s)));
+  c_.gain_reg_decim = std::max(1, static_cast<int>(std::lround(0.04 / c_.bias_ts_s)));
+  c_.gain_reg_lp = filt::butterworth(p_.tau_acc_s, c_.gain_reg_decim * c_.bias_ts_s);
+  const double gain_ts = c_.gain_decim * c_.bias_ts_s;
+  c_.gain_p0 = sq(p_.gyr_gain_sigma_init);
+  c_.gain_v = sq(1e-3) * gain_ts / std::max(p_.gyr_gain_forgetting_time_s, 1e-9);
+  c_.gain_w = c_.bias_motion_w * sq(0.01 * kDeg);
 }
 
 // Period of one stream from its timestamps. Returns false (and counts) for a timestamp that
@@ -159,8 +176,11 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
   st_.last_gyr_rad_s = gyr;
   if (dt_s <= 0) return;  // first sample: nothing to integrate yet
   const double t = std::min(dt_s, p_.max_gap_s);
-  // Exact quaternion exponential of the bias-corrected rate held over the period.
-  const Eigen::Vector3d w = gyr - st_.bias_rad_s;
+  // Exact quaternion exponential of the bias- and gain-corrected rate held over the period.
+  Eigen::Vector3d w = gyr - st_.bias_rad_s;
+  if (p_.gyr_gain_sigma_init > 0) {
+    w -= gyro_gain() * w;
+  }
   const double n = w.norm();
   const double angle = n * t;
   if (angle > 1e-12) {
@@ -169,9 +189,6 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
     st_.q_gyr = st_.q_gyr * dq;
     st_.q_gyr.normalize();
   }
-  // Heading uncertainty grows with the bias uncertainty (about the vertical) over time.
-  const double sb_rad_s = std::sqrt(std::max(st_.bias_p(2, 2), 0.0)) * 0.01 * kDeg;
-  st_.delta_var_rad2 += sb_rad_s * sb_rad_s * t + 1e-7 * t;
 }
 
 void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
@@ -190,7 +207,8 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
     if (st_.rest_t_s >= p_.rest_min_t_s) st_.rest = true;
   }
 
-  // Acc into the almost-inertial frame, low-pass, then into the 6D earth frame.
+  // Low-pass in the almost-inertial frame, then into the 6D earth frame.
+  // Acc into the almost-inertial frame.
   const Eigen::Vector3d acc_i = st_.q_gyr * acc;
   const auto& f = st_.acc_lp.step(acc_i.data(), c_.acc_lp, p_.tau_acc_s, ts);
   Eigen::Vector3d acc_f(f[0], f[1], f[2]);
@@ -220,10 +238,12 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   st_.q_acc.normalize();
 
   st_.bias_corr_sum += acc_e.head<2>();
+  st_.gyr_sum_rad_s += st_.last_gyr_rad_s;
   if (++st_.bias_n >= c_.bias_decim) {
     update_bias(Eigen::Vector3d(st_.bias_corr_sum.x(), st_.bias_corr_sum.y(), 1.0), c_.bias_ts_s);
     st_.bias_n = 0;
     st_.bias_corr_sum.setZero();
+    st_.gyr_sum_rad_s.setZero();
   }
 }
 
@@ -236,6 +256,33 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   const Eigen::Matrix3d r6 = (st_.q_acc * st_.q_gyr).toRotationMatrix();
   Eigen::Matrix3d r_lp = Eigen::Matrix3d::Identity();
   Eigen::Vector2d rb_lp = Eigen::Vector2d::Zero();
+  const bool gain_on = p_.gyr_gain_sigma_init > 0 && p_.motion_bias_est;
+  // The error the current estimates remove: bias plus gain times the block's mean rate.
+  Eigen::Vector3d b_applied = st_.bias_rad_s;
+  if (gain_on) {
+    const Eigen::Vector3d w = st_.gyr_sum_rad_s / c_.bias_decim - st_.bias_rad_s;
+    b_applied += gyro_gain() * w;
+    // Regressor of G (row-major entries ij) in the horizontal rows r: R_ri w_j, summed and
+    // low-passed every gain_reg_decim steps (about 25 Hz; tau_acc is seconds).
+    for (int r = 0; r < 2; ++r)
+      for (int i = 0; i < 3; ++i)
+        st_.gain_reg_sum.block<1, 3>(r, 3 * i) += r6(r, i) * w.transpose();
+    if (++st_.gain_reg_n >= c_.gain_reg_decim) {
+      double g[18];
+      const double inv = 1.0 / st_.gain_reg_n;
+      for (int r = 0; r < 2; ++r)
+        for (int k = 0; k < 9; ++k)
+          g[9 * r + k] = st_.gain_reg_sum(r, k) * inv;
+      const auto& gl =
+          st_.gain_reg_lp.step(g, c_.gain_reg_lp, p_.tau_acc_s, ts * c_.gain_reg_decim);
+      for (int r = 0; r < 2; ++r)
+        for (int k = 0; k < 9; ++k)
+          st_.gain_reg(r, k) = gl[9 * r + k];
+      st_.gain_reg_sum.setZero();
+      st_.gain_reg_n = 0;
+    }
+  }
+  const Eigen::Matrix<double, 2, 9>& reg = st_.gain_reg;
   if (p_.motion_bias_est) {
     // Row-major copy so the 9 channels are the rows of R.
     double rr[9];
@@ -246,7 +293,7 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         r_lp(i, j) = rl[3 * i + j];
-    const double rb[2] = {r6.row(0).dot(st_.bias_rad_s), r6.row(1).dot(st_.bias_rad_s)};
+    const double rb[2] = {r6.row(0).dot(b_applied), r6.row(1).dot(b_applied)};
     const auto& bl = st_.motion_bias_lp.step(rb, c_.bias_lp, p_.tau_acc_s, ts);
     rb_lp = Eigen::Vector2d(bl[0], bl[1]);
   }
@@ -262,6 +309,14 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
     e.x() = -acc_e.y() / ts + rb_lp.x() - r_lp.row(0).dot(b);
     e.y() = acc_e.x() / ts + rb_lp.y() - r_lp.row(1).dot(b);
     e.z() = -r_lp.row(2).dot(b);
+    if (gain_on) {
+      e.head<2>() -= reg * st_.gain;
+      if (++st_.gain_n >= c_.gain_decim) {
+        st_.gain_n = 0;
+        const double clip = p_.bias_clip_deg_s * kDeg;
+        update_gain(e.head<2>().cwiseMax(-clip).cwiseMin(clip), reg, r_lp);
+      }
+    }
     cm = r_lp;
     w = Eigen::Vector3d(c_.bias_motion_w, c_.bias_motion_w, c_.bias_vertical_w);
   } else {
@@ -277,6 +332,32 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   const Eigen::Matrix3d k = st_.bias_p * cm.transpose() * s.inverse();
   st_.bias_rad_s = (st_.bias_rad_s + k * e).cwiseMax(-clip).cwiseMin(clip);
   st_.bias_p -= k * cm * st_.bias_p;
+}
+
+// Gyro-gain Kalman update: residual = reg * (G - G_est) + bias error + noise (rad/s).
+void AttitudeFilter::update_gain(const Eigen::Vector2d& residual,
+                                 const Eigen::Matrix<double, 2, 9>& reg,
+                                 const Eigen::Matrix3d& r_lp) {
+  if (!st_.gain_p_init) {
+    st_.gain_p = Eigen::Matrix<double, 9, 9>::Identity() * c_.gain_p0;
+    st_.gain_p_init = true;
+  }
+  for (int i = 0; i < 9; ++i)
+    if (st_.gain_p(i, i) < c_.gain_p0) st_.gain_p(i, i) += c_.gain_v;
+  // Measurement noise: the motion update's plus the current bias uncertainty.
+  const Eigen::Matrix<double, 2, 3> cb = r_lp.topRows<2>() * (0.01 * kDeg);
+  Eigen::Matrix2d s = cb * st_.bias_p * cb.transpose();
+  s.diagonal().array() += c_.gain_w;
+  const Eigen::Matrix<double, 9, 2> ph = st_.gain_p * reg.transpose();
+  s += reg * ph;
+  const Eigen::Matrix<double, 9, 2> k = ph * s.inverse();
+  const double clip = p_.gyr_gain_clip;
+  st_.gain = (st_.gain + k * residual).cwiseMax(-clip).cwiseMin(clip);
+  st_.gain_p -= k * ph.transpose();
+}
+
+Eigen::Matrix3d AttitudeFilter::gyro_gain() const {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(st_.gain.data());
 }
 
 // Exponentially weighted least squares for (c, h) in R m = c + R h, R = rotation of q_gyr.
@@ -314,8 +395,16 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   if (p_.hard_iron_tau_s > 0) update_hard_iron(mag_raw);
   const Eigen::Vector3d mag =
       st_.hard_iron_valid ? Eigen::Vector3d(mag_raw - st_.hard_iron_uT) : mag_raw;
+  // Into the 6D earth frame, compensated for the latency behind the gyro: a field read L
+  // late is the current one rotated by w L, so v = q6 (w x m) is its rate of change there.
   const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
-  const Eigen::Vector3d m_e = q6 * mag;
+  Eigen::Vector3d m_e = q6 * mag;
+  if (p_.mag_latency_tau_s > 0) {
+    const Eigen::Vector3d v_e = q6 * (st_.last_gyr_rad_s - st_.bias_rad_s).cross(mag);
+    st_.mag_latency.step(m_e, v_e, c_.k_latency_hp, c_.k_latency);
+    m_e -=
+        st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kDeg, p_.mag_latency_max_s) * v_e;
+  }
 
   if (p_.mag_dist_rejection) {
     const double n = m_e.norm();
@@ -374,19 +463,32 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     st_.mag_i_mean += c_.k_mag_consistency * dev;
     st_.mag_i_var_rel +=
         c_.k_mag_consistency * (dev.squaredNorm() / m_i.squaredNorm() - st_.mag_i_var_rel);
-    if (st_.mag_i_var_rel > p_.mag_consistency_th * p_.mag_consistency_th) {
-      st_.mag_disturbed = true;
-      st_.mag_undisturbed_t_s = 0;
-    }
   }
-  double k = c_.k_mag;
+  // Kalman heading. Predict: the heading drifts by the nominal process noise plus what the
+  // gyro-bias uncertainty allows. Measurement variance: nominal (steady state = tau_mag),
+  // inflated by the squared disturbance indicators, each relative to its threshold.
+  const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
+  st_.delta_var_rad2 += (c_.heading_q_rad2_s + sb2) * (dt_s > 0 ? dt_s : ts);  // real gap
+  double r = c_.heading_r0_rad2;
+  if (p_.mag_dist_rejection && st_.mag_ref_norm > 0) {
+    const double dn =
+        (st_.mag_norm_dip[0] - st_.mag_ref_norm) / (p_.mag_norm_th * st_.mag_ref_norm);
+    const double dd = (st_.mag_norm_dip[1] - st_.mag_ref_dip) / (p_.mag_dip_th_deg * kDeg);
+    double score = p_.mag_trust_weight * (dn * dn + dd * dd);
+    if (p_.mag_consistency_th > 0)
+      score += st_.mag_i_var_rel / (p_.mag_consistency_th * p_.mag_consistency_th);
+    // A field that was rejected recently is trusted less until the rejection budget is repaid.
+    score += st_.mag_reject_t_s / p_.tau_mag_s;
+    r *= 1.0 + score;
+  }
+  double k = st_.delta_var_rad2 / (st_.delta_var_rad2 + r);
   if (p_.mag_dist_rejection) {
     if (st_.mag_disturbed) {
       if (st_.mag_reject_t_s <= p_.mag_max_rejection_time_s) {
         st_.mag_reject_t_s += ts;
         k = 0;
       } else {
-        k /= p_.mag_rejection_factor;
+        k = std::min(k, c_.k_mag) / p_.mag_rejection_factor;  // backstop: nominal gain at most
       }
     } else {
       st_.mag_reject_t_s = std::max(st_.mag_reject_t_s - p_.mag_rejection_factor * ts, 0.0);
@@ -397,11 +499,9 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     st_.k_mag_init = st_.k_mag_init / (st_.k_mag_init + 1);
     if (st_.k_mag_init * p_.tau_mag_s < ts) st_.k_mag_init = 0;
   }
-  (void)dt_s;
   st_.delta_rad = wrap_pi(st_.delta_rad + k * err);
-  // Variance after a first-order update with gain k and a (2 deg)^2 measurement variance.
-  constexpr double kMeasVar = (2 * kDeg) * (2 * kDeg);
-  st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * kMeasVar;
+  // Joseph form: valid for the gains the rejection and start-up rules impose as well.
+  st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * r;
   st_.q_delta = heading_quat(st_.delta_rad);
 }
 
@@ -416,7 +516,10 @@ Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
 
 double AttitudeFilter::heading_sigma_rad() const {
   if (!st_.have_mag) return kPi;
-  return std::sqrt(std::max(st_.delta_var_rad2, 0.0));
+  // Predicted to the newest gyro sample (the magnetometer may be slower or missing).
+  const double since_mag_s = std::max(static_cast<double>(st_.t_gyr_ns - st_.t_mag_ns), 0.0) * 1e-9;
+  const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
+  return std::sqrt(std::max(st_.delta_var_rad2 + (c_.heading_q_rad2_s + sb2) * since_mag_s, 0.0));
 }
 
 }  // namespace mocap

@@ -4,15 +4,10 @@
 
 #include "mocap/sim/motion.hpp"
 #include "mocap/skeleton/bvh.hpp"
+#include "smoothstep.hpp"
 
 namespace mocap::sim {
 namespace {
-
-double smooth(double u) {
-  if (u <= 0) return 0;
-  if (u >= 1) return 1;
-  return u * u * u * (10 - 15 * u + 6 * u * u);
-}
 
 template <class V>
 V catmull_rom(const V& p0, const V& p1, const V& p2, const V& p3, double u) {
@@ -52,7 +47,7 @@ class BvhFileMotion final : public Motion {
     std::array<Eigen::Quaterniond, kSegmentCount> q;
     Eigen::Vector3d p;
     if (t_s < lead_s_ + blend_s_) {
-      const double w = smooth((t_s - lead_s_) / std::max(blend_s_, 1e-9));
+      const double w = smoothstep5((t_s - lead_s_) / std::max(blend_s_, 1e-9));
       for (int s = 0; s < kSegmentCount; ++s)
         q[s] = q_stand_.slerp(w, q_[0][s]);
       p = (1 - w) * p_stand_ + w * p_[0];

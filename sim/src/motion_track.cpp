@@ -9,17 +9,12 @@
 #include <stdexcept>
 
 #include "mocap/sim/motion.hpp"
+#include "smoothstep.hpp"
 
 namespace mocap::sim {
 namespace {
 
 constexpr double kBlendHeightM = 0.01;
-
-double smooth(double u) {
-  if (u <= 0) return 0;
-  if (u >= 1) return 1;
-  return u * u * u * (10 - 15 * u + 6 * u * u);
-}
 
 double yaw_of(const Eigen::Quaterniond& q) {
   const Eigen::Vector3d x = q * Eigen::Vector3d::UnitX();
@@ -75,7 +70,7 @@ void MotionTrack::contacts(const BodyPose& o, Contacts& c) const {
   // Within a foot the lower of heel and toe carries it; between feet the lower foot. Both
   // blended over kBlendHeightM of height difference (C2).
   auto blend = [](double z_a, double z_b) {  // weight of b
-    return smooth((z_a - z_b + kBlendHeightM) / (2 * kBlendHeightM));
+    return smoothstep5((z_a - z_b + kBlendHeightM) / (2 * kBlendHeightM));
   };
   const double toe_l = blend(c.p[0].z(), c.p[1].z()), toe_r = blend(c.p[2].z(), c.p[3].z());
   const double z_l = (1 - toe_l) * c.p[0].z() + toe_l * c.p[1].z();

@@ -7,31 +7,26 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "mocap/core/units.hpp"
 #include "mocap/sim/motion.hpp"
+#include "smoothstep.hpp"
 
 namespace mocap::sim {
 namespace {
 
 using Eigen::Quaterniond;
 using Eigen::Vector3d;
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 Quaterniond rx(double deg) {
-  return Quaterniond(Eigen::AngleAxisd(deg * kDeg, Vector3d::UnitX()));
+  return Quaterniond(Eigen::AngleAxisd(deg * kRadPerDeg, Vector3d::UnitX()));
 }
 Quaterniond ry(double deg) {
-  return Quaterniond(Eigen::AngleAxisd(deg * kDeg, Vector3d::UnitY()));
+  return Quaterniond(Eigen::AngleAxisd(deg * kRadPerDeg, Vector3d::UnitY()));
 }
 Quaterniond rz(double deg) {
-  return Quaterniond(Eigen::AngleAxisd(deg * kDeg, Vector3d::UnitZ()));
+  return Quaterniond(Eigen::AngleAxisd(deg * kRadPerDeg, Vector3d::UnitZ()));
 }
 
-/// Quintic smoothstep: 0 below 0, 1 above 1, C2 in between.
-double smooth(double u) {
-  if (u <= 0) return 0;
-  if (u >= 1) return 1;
-  return u * u * u * (10 - 15 * u + 6 * u * u);
-}
 /// C2 bump on [0,1]: 0 at the ends (with zero first and second derivative... first only is
 /// guaranteed zero for 64u^3(1-u)^3, second is zero too), 1 at u = 0.5.
 double bump(double u) {
@@ -41,7 +36,7 @@ double bump(double u) {
 }
 /// Amplitude envelope: ramps 0 -> 1 over `ramp` seconds at the start and back to 0 at the end.
 double envelope(double t, double d, double ramp) {
-  return smooth(t / ramp) * smooth((d - t) / ramp);
+  return smoothstep5(t / ramp) * smoothstep5((d - t) / ramp);
 }
 double frac(double x) {
   return x - std::floor(x);
@@ -105,7 +100,7 @@ void turn(double t, double d, double yaw_deg, BodyPose& p) {
   const double lift_l = a * bump(u / 0.5), lift_r = a * bump((u - 0.5) / 0.5);
   leg(p, true, 25 * lift_l, 45 * lift_l, 0);
   leg(p, false, 25 * lift_r, 45 * lift_r, 0);
-  p.q_earth_pelvis = rz(yaw_deg * smooth((t - 0.3) / (d - 0.6)));
+  p.q_earth_pelvis = rz(yaw_deg * smoothstep5((t - 0.3) / (d - 0.6)));
   set(p, Segment::forearm_l, ry(-15 * a));
   set(p, Segment::forearm_r, ry(-15 * a));
 }

@@ -1,5 +1,6 @@
 // Virtual IMU error model, magnetic field and sensor mounting (see sensor_model.hpp).
 #include "mocap/sim/sensor_model.hpp"
+#include "mocap/core/units.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -7,9 +8,7 @@
 #include <string>
 
 namespace mocap::sim {
-namespace {
-constexpr double kDeg = std::numbers::pi / 180.0;
-}
+namespace {}
 
 SensorModelParams SensorModelParams::ideal() {
   SensorModelParams p;
@@ -24,7 +23,7 @@ SensorModelParams SensorModelParams::ideal() {
 }
 
 Eigen::Vector3d MagneticFieldParams::earth_field_uT() const {
-  const double inc = inclination_deg * kDeg, dec = declination_deg * kDeg;
+  const double inc = inclination_deg * kRadPerDeg, dec = declination_deg * kRadPerDeg;
   const double h = total_uT * std::cos(inc);
   return {h * std::sin(dec), h * std::cos(dec), -total_uT * std::sin(inc)};
 }
@@ -116,7 +115,7 @@ SensorMount make_mount(Segment seg, const BodyDimensions& dims, const SensorMode
   // Sensor z along the outward normal, then the strap roll about it, then misalignment.
   Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(V::UnitZ(), normal);
   std::uniform_real_distribution<double> roll(-std::numbers::pi, std::numbers::pi);
-  std::normal_distribution<double> tilt(0.0, p.mount_misalignment_deg * kDeg);
+  std::normal_distribution<double> tilt(0.0, p.mount_misalignment_deg * kRadPerDeg);
   const double roll_rad = roll(rng);  // drawn always so the stream does not depend on flags
   // The pelvis sensor sits on a belt clip with a fixed roll (its x axis up), so its -z axis points
   // forward: the calibration's heading reference. Other straps have any roll.
@@ -130,9 +129,9 @@ SensorMount make_mount(Segment seg, const BodyDimensions& dims, const SensorMode
 
 SensorErrorModel::SensorErrorModel(const SensorModelParams& p, double rate_hz, uint64_t seed)
     : p_(p), rng_(seed) {
-  gyr_sigma_rad_s_ = p.gyr_noise_density_dps_rthz * kDeg * std::sqrt(rate_hz);
+  gyr_sigma_rad_s_ = p.gyr_noise_density_dps_rthz * kRadPerDeg * std::sqrt(rate_hz);
   acc_sigma_m_s2_ = p.acc_noise_density_m_s2_rthz * std::sqrt(rate_hz);
-  gyr_bias_rad_s_ = noise3(p.gyr_bias_sigma_dps * kDeg);
+  gyr_bias_rad_s_ = noise3(p.gyr_bias_sigma_dps * kRadPerDeg);
   gyr_scale_ = Eigen::Vector3d::Ones() + noise3(p.gyr_scale_sigma);
   acc_bias_m_s2_ = noise3(p.acc_bias_sigma_m_s2);
   acc_scale_ = Eigen::Vector3d::Ones() + noise3(p.acc_scale_sigma);
@@ -155,8 +154,8 @@ void SensorErrorModel::measure(const SensorKinematics& k, const Eigen::Vector3d&
       acc_scale_.cwiseProduct(q_sensor_earth * f_earth) + acc_bias_m_s2_ + noise3(acc_sigma_m_s2_);
   out.mag_uT = mag_scale_.cwiseProduct(q_sensor_earth * b_earth_uT) + mag_offset_uT_ +
                noise3(p_.mag_noise_uT);
-  gyr_bias_rad_s_ += noise3(p_.gyr_bias_walk_dps_rts * kDeg * std::sqrt(std::max(dt_s, 0.0)));
-  const double gyr_max = p_.gyr_range_dps * kDeg;
+  gyr_bias_rad_s_ += noise3(p_.gyr_bias_walk_dps_rts * kRadPerDeg * std::sqrt(std::max(dt_s, 0.0)));
+  const double gyr_max = p_.gyr_range_dps * kRadPerDeg;
   bool saturated = false;
   for (int i = 0; i < 3; ++i) {
     if (std::abs(out.gyr_rad_s[i]) > gyr_max) {

@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "mocap/skeleton/bvh.hpp"
+#include "mocap/skeleton/forward_kinematics.hpp"
 #include "mocap/skeleton/quat_math.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
@@ -138,17 +139,10 @@ void BvhMotion::to_pose_frame(int k, PoseFrame& out) const {
   std::array<Eigen::Quaterniond, kSegmentCount> q;
   Eigen::Vector3d root;
   frame(k, q, root);
-  std::array<Eigen::Vector3d, kSegmentCount> p;
   out.frame = static_cast<uint64_t>(k);
   out.t_ns = static_cast<int64_t>(std::llround(k * clip_.frame_time_s * 1e9));
+  pose_from_earth_orientations(dims_, q, root, out);
   for (int s = 0; s < kSegmentCount; ++s) {
-    const int par = kSegmentParent[s];
-    p[s] = par < 0 ? root : Eigen::Vector3d(p[par] + q[par] * dims_.joint_offset_m[s]);
-    const Eigen::Quaterniond qj = par < 0 ? q[s] : (q[par].conjugate() * q[s]).normalized();
-    out.q_earth_segment[s] = to_wxyz(q[s]);
-    out.q_parent_segment[s] = to_wxyz(qj);
-    out.p_earth_segment_m[s] = {static_cast<float>(p[s].x()), static_cast<float>(p[s].y()),
-                                static_cast<float>(p[s].z())};
     out.joint_violation_deg[s] = 0;
     out.segment_flags[s] = joint_[s] >= 0 ? kSegTracked : kSegInferred;
   }

@@ -1,5 +1,6 @@
 // Calibration capture and evaluation (N-pose, T-pose, N-then-T arm swing), heading reset.
 #include "mocap/skeleton/calibration.hpp"
+#include "mocap/core/units.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -10,7 +11,6 @@
 namespace mocap {
 
 namespace {
-constexpr double kGravity_m_s2 = 9.80665;
 
 bool is_arm(int s) {
   return s == index(Segment::upper_arm_l) || s == index(Segment::forearm_l) ||
@@ -81,7 +81,7 @@ void Calibrator::add_sample(int segment, const Eigen::Quaterniond& q, int64_t t_
   if (acc_sensor_m_s2 && acc_sensor_m_s2->allFinite()) {
     const Eigen::Vector3d f = qn * *acc_sensor_m_s2;
     a.acc_earth += f;
-    const double dev = std::abs(f.norm() - kGravity_m_s2);
+    const double dev = std::abs(f.norm() - kStandardGravity_m_s2);
     a.acc_norm_max_dev = std::max(a.acc_norm_max_dev, dev);
     ++a.n_acc;
   }

@@ -9,13 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "mocap/daemon/session_reader.hpp"
-#include "mocap/daemon/session_writer.hpp"
+#include "mocap/session/session_reader.hpp"
+#include "mocap/session/session_writer.hpp"
 
 namespace mocap::test {
 
-inline daemon::session::SessionHeader make_header() {
-  daemon::session::SessionHeader h;
+inline session::SessionHeader make_header() {
+  session::SessionHeader h;
   h.t_start_unix_ns = 1'763'000'000'000'000'000;
   h.t_start_host_ns = 123'456'789;
   h.config_text = "[rig]\nname = \"test\"\n[[sensor]]\nname = \"pelvis\"\n";

@@ -137,6 +137,12 @@ TEST(Pipeline, LiveThreadsDeliverFramesAndCountDrops) {
   } tap;
   p.set_record_tap(&tap);
   p.start();
+  // Let the pipeline drain the full ring before the producers start: pushing into a ring that
+  // is still full would drop more samples, by an amount that depends on scheduling.
+  const int64_t drain_deadline = monotonic_ns() + 10'000'000'000;
+  while (p.status().samples < Pipeline::kRingCapacity && monotonic_ns() < drain_deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  ASSERT_EQ(p.status().samples, Pipeline::kRingCapacity);
   // Two producer threads (one per sensor), like two device reader threads.
   std::vector<std::thread> producers;
   for (uint16_t id = 0; id < 2; ++id) {

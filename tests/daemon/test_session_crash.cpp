@@ -16,9 +16,9 @@
 
 using namespace mocap;
 using namespace mocap::test;
-using mocap::daemon::SessionReader;
-using mocap::daemon::SessionWriter;
-namespace ses = mocap::daemon::session;
+using mocap::SessionReader;
+using mocap::SessionWriter;
+namespace ses = mocap::session;
 
 namespace {
 

@@ -15,7 +15,7 @@
 
 using namespace mocap;
 using namespace mocap::test;
-using mocap::daemon::SessionWriter;
+using mocap::SessionWriter;
 
 namespace {
 

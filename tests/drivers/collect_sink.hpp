@@ -1,4 +1,5 @@
-// A SampleSink for tests: keeps every sample and connection event, thread-safe.
+// Helpers for the driver tests: a SampleSink that keeps every sample and connection event
+// (thread-safe), the log sink the tests' devices write to, and a free loopback port.
 #pragma once
 
 #include <chrono>
@@ -8,10 +9,14 @@
 #include <thread>
 #include <vector>
 
+#include "../common/free_port.hpp"
 #include "mocap/core/time.hpp"
 #include "mocap/drivers/device.hpp"
 
 namespace mocap::test {
+
+/// Where the tests' devices log (written only; one per test program).
+inline LogSink g_log_sink;
 
 struct ConnectionEvent {
   bool connected;

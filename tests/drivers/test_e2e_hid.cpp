@@ -17,8 +17,6 @@ using namespace mocap;
 
 namespace {
 
-LogSink g_log_sink;
-
 struct Case {
   const char* protocol;
   double rate_hz;
@@ -32,7 +30,7 @@ void run_case(const Case& c, std::map<std::string, std::string> enc_opts = {},
   DeviceSpec spec{
       .name = c.protocol, .protocol = c.protocol, .port = "hid:0:0", .options = dev_opts};
   auto dev = make_device_with_transport(
-      spec, Logger(g_log_sink, "test", LogLevel::warn),
+      spec, Logger(test::g_log_sink, "test", LogLevel::warn),
       [&](std::string&) -> std::unique_ptr<ByteTransport> {
         return std::make_unique<SimReportTransport>(
             make_encoder(c.protocol, {.rate_hz = c.rate_hz, .options = enc_opts}),
@@ -144,20 +142,12 @@ TEST(E2eHid, ControllersOverUdpDatagrams) {
   // A controller bridged over UDP (one report per datagram, calibration repeated unsolicited):
   // the same decoder through the real UDP transport.
   for (const char* proto : {"ds4", "joycon"}) {
-    int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-    socklen_t len = sizeof a;
-    ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-    ::close(fd);
-    const std::string addr = "127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+    const std::string addr = "127.0.0.1:" + std::to_string(test::free_loopback_port(SOCK_DGRAM));
     DeviceSpec spec{.name = proto,
                     .protocol = proto,
                     .port = "udp:" + addr,
                     .options = {{"usb_handshake", "0"}}};
-    auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::error));
+    auto dev = make_device(spec, Logger(test::g_log_sink, "test", LogLevel::error));
     test::CollectSink sink;
     dev->start(sink);
     // The socket must be bound before the simulator's first datagram (its calibration).

@@ -27,18 +27,6 @@ std::string temp_link(const char* name) {
   return (dir / name).string();
 }
 
-int free_udp_port() {
-  int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t len = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
-
 /// Compares every decoded sample with the truth at its device time; returns the max errors.
 /// device_origin_ns: the device clock reading at simulated time 0.
 Tolerance check_against_truth(const std::vector<ImuSample>& got, const Motion& m, uint8_t fields,
@@ -59,8 +47,6 @@ Tolerance check_against_truth(const std::vector<ImuSample>& got, const Motion& m
   return e;
 }
 
-LogSink g_log_sink;  // test-local; only writes
-
 }  // namespace
 
 TEST(E2eSerial, LineOverPtyWithDropsAndGarbage) {
@@ -73,7 +59,7 @@ TEST(E2eSerial, LineOverPtyWithDropsAndGarbage) {
   SimulatedDevice sim(so);
   sim.start();
   DeviceSpec spec{.name = "line0", .protocol = "line", .port = sim.path()};
-  auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
+  auto dev = make_device(spec, Logger(test::g_log_sink, "test", LogLevel::warn));
   test::CollectSink sink;
   dev->start(sink);
   ASSERT_TRUE(sink.wait_for([&] { return sink.count() >= 400; }));
@@ -117,7 +103,7 @@ TEST(E2eSerial, WitmotionOverPtyIsConfiguredByTheDriver) {
                   .port = sim.path(),
                   .rate_hz = 100,
                   .options = {{"device_baud", "115200"}}};
-  auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
+  auto dev = make_device(spec, Logger(test::g_log_sink, "test", LogLevel::warn));
   test::CollectSink sink;
   dev->start(sink);
   ASSERT_TRUE(sink.wait_for([&] {
@@ -156,7 +142,7 @@ TEST(E2eSerial, VanishedPtyIsReportedAndReopened) {
   SimulatedDevice sim(so);
   sim.start();
   DeviceSpec spec{.name = "v0", .protocol = "line", .port = sim.path()};
-  auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::error));
+  auto dev = make_device(spec, Logger(test::g_log_sink, "test", LogLevel::error));
   test::CollectSink sink;
   dev->start(sink);
   ASSERT_TRUE(sink.wait_for([&] { return sink.count() >= 50; }));
@@ -180,9 +166,9 @@ TEST(E2eSerial, VanishedPtyIsReportedAndReopened) {
 }
 
 TEST(E2eSerial, LineOverUdp) {
-  const std::string addr = "127.0.0.1:" + std::to_string(free_udp_port());
+  const std::string addr = "127.0.0.1:" + std::to_string(test::free_loopback_port(SOCK_DGRAM));
   DeviceSpec spec{.name = "u0", .protocol = "line", .port = "udp:" + addr};
-  auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
+  auto dev = make_device(spec, Logger(test::g_log_sink, "test", LogLevel::warn));
   test::CollectSink sink;
   dev->start(sink);
   ASSERT_TRUE(sink.wait_for([&] { return !sink.events_snapshot().empty(); }));  // bound
@@ -204,7 +190,7 @@ TEST(E2eSerial, LineOverUdp) {
 }
 
 TEST(E2eSerial, BadSpecsGetClearErrors) {
-  Logger log(g_log_sink, "test", LogLevel::off);
+  Logger log(test::g_log_sink, "test", LogLevel::off);
   EXPECT_THROW(make_device({.name = "x", .protocol = "nope", .port = "/dev/null"}, log),
                std::invalid_argument);
   EXPECT_THROW(make_device({.name = "x", .protocol = "line", .port = "hid:zz:1"}, log),
@@ -236,7 +222,7 @@ TEST(E2eSerial, XbusOverPtyConfiguredWithRolloversDropsAndGarbage) {
                   .port = sim.path(),
                   .rate_hz = 100,
                   .options = {{"mag_scale_uT", "50"}}};
-  auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::warn));
+  auto dev = make_device(spec, Logger(test::g_log_sink, "test", LogLevel::warn));
   test::CollectSink sink;
   dev->start(sink);
   ASSERT_TRUE(sink.wait_for([&] { return sink.count() >= 250; }));
@@ -287,7 +273,7 @@ TEST(E2eSerial, MocapSimulateCommandServesTheDriver) {
   ASSERT_EQ(path.rfind("pty: ", 0), 0u) << path;
   path = path.substr(5, path.find('\n') - 5);
   DeviceSpec spec{.name = "cli", .protocol = "witmotion", .port = path, .rate_hz = 100};
-  auto dev = make_device(spec, Logger(g_log_sink, "test", LogLevel::error));
+  auto dev = make_device(spec, Logger(test::g_log_sink, "test", LogLevel::error));
   test::CollectSink sink;
   dev->start(sink);
   const bool ok = sink.wait_for([&] { return sink.count() >= 100; });

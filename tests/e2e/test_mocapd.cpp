@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "mocap/daemon/control.hpp"
-#include "mocap/daemon/session_reader.hpp"
+#include "mocap/session/session_reader.hpp"
 
 extern char** environ;
 namespace fs = std::filesystem;
@@ -188,20 +188,22 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   EXPECT_FALSE(fs::exists(sock));
 
   for (const char* f : {"a.mcap", "b.mcap"}) {
-    mocap::daemon::SessionReader r;
+    mocap::SessionReader r;
     std::string err;
     ASSERT_TRUE(r.open((dir / f).string(), &err)) << err;
     EXPECT_EQ(r.header().sensors.size(), 15u);
-    mocap::daemon::SessionReader::Block b;
+    mocap::SessionReader::Block b;
     int raw = 0, samples = 0, poses = 0;
     while (r.next(b)) {
-      raw += b.type == mocap::daemon::session::BlockType::raw;
-      samples += b.type == mocap::daemon::session::BlockType::sample;
-      poses += b.type == mocap::daemon::session::BlockType::pose;
+      raw += b.type == mocap::session::BlockType::raw;
+      samples += b.type == mocap::session::BlockType::sample;
+      poses += b.type == mocap::session::BlockType::pose;
     }
-    EXPECT_EQ(r.end(), mocap::daemon::SessionReader::End::clean) << f;
-    EXPECT_GT(raw, 100) << f;
-    EXPECT_GT(samples, 500) << f;
+    EXPECT_EQ(r.end(), mocap::SessionReader::End::clean) << f;
+    // Counts, not rates: how many reads the bytes arrive in depends on scheduling (a loaded
+    // machine reads bigger chunks), so raw blocks are only required to be there.
+    EXPECT_GT(raw, 0) << f;
+    EXPECT_GT(samples, 300) << f;
     EXPECT_GT(poses, 30) << f;
   }
 
@@ -332,8 +334,10 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
     const auto z = [&](const char* n) { return seg.at(n)["p"][2].get<double>(); };
     EXPECT_GT(z("head") - z("pelvis"), 0.35) << l.dump();
     for (const char* foot : {"foot_l", "foot_r"}) {
-      EXPECT_LT(z(foot) - z("pelvis"), -0.6) << l.dump();
-      EXPECT_LT(z(foot), 0.25) << l.dump();
+      // Near the floor: the performer may already be walking (a loaded machine reads these
+      // lines later), and a swing foot rises up to about 0.3 m.
+      EXPECT_LT(z(foot) - z("pelvis"), -0.5) << l.dump();
+      EXPECT_LT(z(foot), 0.4) << l.dump();
       EXPECT_GT(z(foot), -0.1) << l.dump();
     }
     // Pelvis up axis (third column of its rotation) within 30 degrees of earth up.

@@ -10,9 +10,9 @@
 #include <cstdlib>
 #include <vector>
 
-#include "mocap/daemon/session_reader.hpp"
+#include "mocap/session/session_reader.hpp"
 
-namespace ses = mocap::daemon::session;
+namespace ses = mocap::session;
 
 namespace {
 
@@ -49,13 +49,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     bytes = framed(data + 1, size - 1);
   else
     bytes.assign(data, data + size);
-  mocap::daemon::SessionReader reader;
+  mocap::SessionReader reader;
   std::string error;
   if (!reader.open_bytes(bytes, &error)) {
     if (error.empty()) std::abort();
     return 0;
   }
-  mocap::daemon::SessionReader::Block block;
+  mocap::SessionReader::Block block;
   while (reader.next(block)) {
     if (block.type == ses::BlockType::pose) {
       for (const auto& q : block.pose.q_earth_segment)
@@ -63,8 +63,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
           if (!std::isfinite(v)) std::abort();
     }
   }
-  if (reader.end() == mocap::daemon::SessionReader::End::not_reached) std::abort();
-  if (reader.end() != mocap::daemon::SessionReader::End::clean && reader.tail_reason().empty())
+  if (reader.end() == mocap::SessionReader::End::not_reached) std::abort();
+  if (reader.end() != mocap::SessionReader::End::clean && reader.tail_reason().empty())
     std::abort();
   return 0;
 }

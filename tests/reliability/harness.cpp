@@ -2,6 +2,8 @@
 // clients (see harness.hpp).
 #include "harness.hpp"
 
+#include "../common/free_port.hpp"
+
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -14,6 +16,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -44,19 +47,11 @@ TempDir::~TempDir() {
 }
 
 int free_tcp_port() {
-  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = 0;
-  socklen_t len = sizeof a;
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
-      ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
-    ::close(fd);
-    throw std::runtime_error("no free TCP port");
-  }
-  ::close(fd);
-  return ntohs(a.sin_port);
+  return test::free_loopback_port(SOCK_STREAM);
+}
+
+int free_udp_port() {
+  return test::free_loopback_port(SOCK_DGRAM);
 }
 
 bool wait_until(const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
@@ -85,15 +80,18 @@ bool LineSensorPty::write_sample(uint64_t t_us, double phase) {
 }
 
 bool LineSensorPty::write_bytes(const std::string& bytes) {
+  std::lock_guard lock(mu_);  // the feeder thread writes while the test unplugs
   if (!pty_) return false;
   return pty_->write({reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()});
 }
 
 void LineSensorPty::vanish() {
+  std::lock_guard lock(mu_);
   pty_.reset();
 }
 
 void LineSensorPty::reappear() {
+  std::lock_guard lock(mu_);
   if (!pty_) pty_ = std::make_unique<PtyEndpoint>(link_);
 }
 
@@ -324,6 +322,24 @@ nlohmann::json sensor_status(const nlohmann::json& status, const std::string& na
 
 // ---- JSON stream client ----
 
+namespace {
+
+/// The number after `"key":` at the top level of a frame line (the schema puts "frame" and "t"
+/// before any nested object). False if absent or not a number.
+template <class T>
+bool top_level_number(std::string_view line, std::string_view key, T& out) {
+  const std::string pattern = "\"" + std::string(key) + "\":";
+  const std::size_t at = line.find(pattern);
+  const std::size_t nested = line.find_first_of("[{", 1);
+  if (at == std::string_view::npos || (nested != std::string_view::npos && at > nested))
+    return false;
+  const char* b = line.data() + at + pattern.size();
+  const auto r = std::from_chars(b, line.data() + line.size(), out);
+  return r.ec == std::errc();
+}
+
+}  // namespace
+
 struct StreamClient::State {
   std::atomic<bool> stop{false};
   mutable std::mutex mu;
@@ -359,19 +375,23 @@ StreamClient::StreamClient(int port, bool read) : st_(std::make_shared<State>())
       while ((nl = buf.find('\n', start)) != std::string::npos) {
         const std::string_view line(buf.data() + start, nl - start);
         start = nl + 1;
+        // Validated as JSON without building a document, frame and time read in place: with
+        // 100 client threads a DOM per line (dozens of allocations) made the test crawl on
+        // the sanitizer's allocator lock.
+        int64_t f = -1;
+        double t_s = 0;
+        const bool ok = nlohmann::json::accept(line) && top_level_number(line, "frame", f) &&
+                        top_level_number(line, "t", t_s);
         std::lock_guard lock(st->mu);
         ++st->lines;
-        try {
-          const auto j = nlohmann::json::parse(line);
-          const int64_t f = j.at("frame").get<int64_t>();
-          if (st->last_frame >= 0 && f > st->last_frame + 1)
-            st->gaps += static_cast<uint64_t>(f - st->last_frame - 1);
-          st->last_frame = f;
-          if (st->latencies_ms.size() < 200000)
-            st->latencies_ms.push_back((now_s - j.at("t").get<double>()) * 1e3);
-        } catch (const std::exception&) {
+        if (!ok) {
           ++st->bad;
+          continue;
         }
+        if (st->last_frame >= 0 && f > st->last_frame + 1)
+          st->gaps += static_cast<uint64_t>(f - st->last_frame - 1);
+        st->last_frame = f;
+        if (st->latencies_ms.size() < 200000) st->latencies_ms.push_back((now_s - t_s) * 1e3);
       }
       buf.erase(0, start);
     }

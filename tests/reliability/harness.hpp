@@ -31,8 +31,9 @@ class TempDir {
   std::string path_;
 };
 
-/// A TCP port that was free a moment ago on 127.0.0.1.
+/// A TCP / UDP port that was free a moment ago on 127.0.0.1.
 int free_tcp_port();
+int free_udp_port();
 
 /// Polls pred every 20 ms until it is true or timeout passes; returns the last result.
 bool wait_until(const std::function<bool()>& pred, std::chrono::milliseconds timeout);
@@ -53,6 +54,7 @@ class LineSensorPty {
 
  private:
   std::string link_;
+  std::mutex mu_;  // guards pty_
   std::unique_ptr<PtyEndpoint> pty_;
 };
 

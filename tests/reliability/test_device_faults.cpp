@@ -2,14 +2,21 @@
 // each driven by this test. One stays healthy while the others get garbage bytes, truncated
 // frames, a wrong-baud burst, a 10x flood, time-counter rollover and clock jumps, or vanish and
 // come back. The daemon must keep every other sensor streaming, keep publishing frames, and
-// report each fault in its status.
+// report each fault in its status. A UDP (Wi-Fi) sensor drops out, returns and sends noise.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <thread>
 
 #include "harness.hpp"
+#include "mocap/drivers/line_protocol.hpp"
 
 using namespace mocap::reliability;
 using namespace std::chrono_literals;
@@ -164,5 +171,116 @@ TEST(DeviceFaults, DeviceThatDisappearsIsReportedAndRecovers) {
                 rec);
   }
   EXPECT_NE(d.log_text().find("lost"), std::string::npos) << "the loss is logged";
+  EXPECT_EQ(d.quit(), 0) << d.log_text();
+}
+
+namespace {
+
+/// A Wi-Fi sensor: line-protocol datagrams to the daemon's UDP port at 100 Hz from its own
+/// thread, with the same fault modes as the pty feeder (silent = radio drop-out).
+class UdpLineSender {
+ public:
+  explicit UdpLineSender(int port) : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
+    to_.sin_family = AF_INET;
+    to_.sin_port = htons(static_cast<uint16_t>(port));
+    to_.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    thread_ = std::thread([this] { run(); });
+  }
+  ~UdpLineSender() {
+    stop_ = true;
+    thread_.join();
+    ::close(fd_);
+  }
+  std::atomic<FaultMode> mode{FaultMode::normal};
+  std::atomic<uint64_t> garbage_sent{0};
+
+ private:
+  void send(const std::string& bytes) {
+    ::sendto(fd_, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to_),
+             sizeof to_);
+  }
+  void run() {
+    uint64_t t_us = 1000, tick = 0;
+    std::mt19937 rng(7);
+    auto next = std::chrono::steady_clock::now();
+    while (!stop_) {
+      next += 10ms;
+      std::this_thread::sleep_until(next);
+      const FaultMode m = mode.load();
+      t_us += 10'000;
+      ++tick;
+      if (m == FaultMode::silent) continue;
+      if (m == FaultMode::garbage) {  // a datagram of noise, and now and then a huge one
+        std::string junk(tick % 10 == 0 ? 60'000 : 1 + rng() % 200, '\0');
+        for (char& c : junk)
+          c = static_cast<char>(rng());
+        send(junk);
+        ++garbage_sent;
+      }
+      const double phase = 0.01 * static_cast<double>(tick);
+      const std::array<double, 9> v{0.0,  0.0, 1.0,  0.0, 0.0, 17.0 * std::cos(phase),
+                                    20.0, 0.0, -40.0};
+      send(mocap::line::format_line(t_us, v, true));
+    }
+  }
+  int fd_;
+  sockaddr_in to_{};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace
+
+TEST(DeviceFaults, UdpSensorDropOutAndNoiseAreReportedAndItRecovers) {
+  TempDir dir;
+  LineSensorPty a(dir.file("a"));
+  LineFeeder::Sensor sa{&a, 0xffffffffull, 1000};
+  LineFeeder feeder({&sa});
+  const int udp_port = free_udp_port();
+  const std::string cfg =
+      base_config(dir, free_tcp_port()) + line_sensor_toml("a", a.link(), "pelvis") +
+      line_sensor_toml("w", "udp:127.0.0.1:" + std::to_string(udp_port), "torso");
+  Daemon d(dir, "udp", cfg);
+  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
+  UdpLineSender w(udp_port);
+  ASSERT_GE(recovery_s(d, "w", 15s), 0) << d.log_text();
+
+  for (int round = 0; round < 2; ++round) {
+    // Radio drop-out: the datagrams stop. The sensor is reported, the other one streams on.
+    w.mode = FaultMode::silent;
+    EXPECT_TRUE(wait_until(
+        [&] { return sensor_status(d.status(), "w").value("state", "") != "streaming"; }, 10s))
+        << d.status().dump();
+    const uint64_t a_drops = sensor_status(d.status(), "a").value("drops", 0ull);
+    const uint64_t frame_before = d.status().value("frame", 0ull);
+    std::this_thread::sleep_for(700ms);
+    const auto mid = d.status();
+    EXPECT_EQ(sensor_status(mid, "a").value("state", ""), "streaming") << mid.dump();
+    EXPECT_EQ(sensor_status(mid, "a").value("drops", 0ull), a_drops);
+    EXPECT_GT(mid.value("frame", 0ull), frame_before);
+    w.mode = FaultMode::normal;
+    const double rec = recovery_s(d, "w", 10s);
+    EXPECT_GE(rec, 0) << "the UDP sensor did not come back\n" << d.log_text();
+    std::printf("[figures] udp drop-out round %d: streaming again %.2f s after data resumed\n",
+                round, rec);
+  }
+
+  // Noise datagrams (1-200 random bytes, every tenth 60 kB) between the good ones: counted as
+  // errors, the good datagrams still decode, the daemon and the other sensor carry on.
+  const uint64_t errors_before = sensor_status(d.status(), "w").value("errors", 0ull);
+  const uint64_t samples_before = d.status().value("samples", 0ull);
+  w.mode = FaultMode::garbage;
+  std::this_thread::sleep_for(1s);
+  w.mode = FaultMode::normal;
+  std::this_thread::sleep_for(300ms);
+  const auto after = d.status();
+  EXPECT_GT(sensor_status(after, "w").value("errors", 0ull), errors_before) << after.dump();
+  EXPECT_EQ(sensor_status(after, "w").value("state", ""), "streaming") << after.dump();
+  EXPECT_EQ(sensor_status(after, "a").value("state", ""), "streaming") << after.dump();
+  EXPECT_GT(after.value("samples", 0ull), samples_before + 100);
+  std::printf("[figures] udp noise: %llu junk datagrams -> %llu errors reported\n",
+              static_cast<unsigned long long>(w.garbage_sent.load()),
+              static_cast<unsigned long long>(sensor_status(after, "w").value("errors", 0ull) -
+                                              errors_before));
   EXPECT_EQ(d.quit(), 0) << d.log_text();
 }

@@ -16,11 +16,11 @@
 
 #include "harness.hpp"
 #include "mocap/core/time.hpp"
-#include "mocap/daemon/session_reader.hpp"
+#include "mocap/session/session_reader.hpp"
 
 using namespace mocap;
 using namespace mocap::reliability;
-using mocap::daemon::SessionReader;
+using mocap::SessionReader;
 using namespace std::chrono_literals;
 
 namespace {
@@ -46,7 +46,7 @@ ReadBack read_back(const std::string& path) {
   int64_t last_frame = -1;
   while (r.next(b)) {
     switch (b.type) {
-      case daemon::session::BlockType::sample: {
+      case session::BlockType::sample: {
         auto& lt = last_t[b.sample.sensor_id];
         if (b.sample.t_host_ns < lt) rb.samples_in_order = false;
         lt = b.sample.t_host_ns;
@@ -54,7 +54,7 @@ ReadBack read_back(const std::string& path) {
         ++rb.samples[b.sample.sensor_id];
         break;
       }
-      case daemon::session::BlockType::pose:
+      case session::BlockType::pose:
         if (static_cast<int64_t>(b.pose.frame) <= last_frame) rb.poses_in_order = false;
         last_frame = static_cast<int64_t>(b.pose.frame);
         ++rb.poses;

@@ -4,12 +4,16 @@
 
 #include <Eigen/Geometry>
 #include <array>
+#include <cstdint>
 #include <random>
 
 #include "mocap/core/segments.hpp"
 #include "mocap/skeleton/quat_math.hpp"
 
 namespace mocap::test {
+
+/// One millisecond in nanoseconds (sample timestamps).
+inline constexpr int64_t kMs = 1'000'000;
 
 inline Eigen::Quaterniond random_rotation(std::mt19937& rng) {
   std::normal_distribution<double> n(0, 1);

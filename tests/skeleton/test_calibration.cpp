@@ -8,7 +8,7 @@
 namespace mocap {
 namespace {
 
-constexpr int64_t kMs = 1'000'000;
+using test::kMs;
 
 struct Rig {
   std::array<Eigen::Quaterniond, kSegmentCount> q_sensor_segment;  // true mounting

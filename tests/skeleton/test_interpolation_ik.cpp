@@ -9,7 +9,7 @@
 namespace mocap {
 namespace {
 
-constexpr int64_t kMs = 1'000'000;
+using test::kMs;
 
 TEST(Slerp, ShortestPathConstantSpeed) {
   std::mt19937 rng(41);

@@ -11,7 +11,7 @@
 namespace mocap {
 namespace {
 
-constexpr int64_t kMs = 1'000'000;
+using test::kMs;
 
 Eigen::Vector3d pos(const PoseFrame& f, int s) {
   return Eigen::Vector3d(f.p_earth_segment_m[s][0], f.p_earth_segment_m[s][1],

@@ -8,11 +8,13 @@
 #include <cstdlib>
 #include <string>
 
+#include "mocap/session/session_writer.hpp"
 #include "mocap/skeleton/bvh.hpp"
 #include "mocap/skeleton/posture_shm.hpp"
 #include "mocap/viewer/avatar_geometry.hpp"
 #include "mocap/viewer/camera.hpp"
 #include "mocap/viewer/png_io.hpp"
+#include "mocap/viewer/session_source.hpp"
 #include "mocap/viewer/synthetic_source.hpp"
 
 namespace mocap::viewer {
@@ -231,6 +233,53 @@ TEST_F(Render, BvhPlaybackShowsTheFilesPose) {
                              f.p_earth_segment_m[index(Segment::shank_l)][2]);
   EXPECT_GT(knee.x(), 2.3f);
   EXPECT_GT(knee.z(), 0.8f);
+}
+
+TEST_F(Render, SessionPlaybackShowsTheRecordedPose) {
+  // A session as mocapd records it: a 1.60 m person crouching on the left leg 1 m north.
+  const std::string path = png_ + ".mocap";
+  const BodyDimensions dims = body_dimensions_from_height(1.60);
+  PoseFrame f;
+  reset_pose(f);
+  std::array<Eigen::Quaternionf, kSegmentCount> q;
+  q.fill(Eigen::Quaternionf::Identity());
+  q[index(Segment::thigh_l)] = Eigen::AngleAxisf(-1.2f, Eigen::Vector3f::UnitY());
+  q[index(Segment::shank_l)] = Eigen::AngleAxisf(1.2f, Eigen::Vector3f::UnitY());
+  pose_from_joint_rotations(dims, q, Eigen::Vector3f(0, 1, 0.8f), f);
+  {
+    std::string error;
+    auto w = SessionWriter::create(path, session::SessionHeader{}, {}, &error);
+    ASSERT_TRUE(w) << error;
+    for (int k = 0; k < 30; ++k) {
+      f.frame = static_cast<uint64_t>(k);
+      f.t_ns = int64_t{k} * 8'333'333;
+      ASSERT_TRUE(w->append_pose(f));
+    }
+    ASSERT_TRUE(w->close());
+  }
+  ASSERT_EQ(
+      run("--play " + path + " --screenshot " + png_ + " --frames 3 --size " + std::to_string(kW) +
+          "x" + std::to_string(kH) + " --no-hud --no-labels --no-earth-axes --no-shadows"),
+      0);
+  std::remove(path.c_str());
+  const RgbImage img = read_png(png_);
+  OrbitCamera cam = OrbitCamera::framing(1);  // --play follows the pelvis
+  cam.target_m.x() = f.p_earth_segment_m[0][0];
+  cam.target_m.y() = f.p_earth_segment_m[0][1];
+  for (Segment s :
+       {Segment::head, Segment::torso, Segment::thigh_l, Segment::shank_l, Segment::shank_r}) {
+    const auto p = cam.project(segment_midpoint(f, dims, index(s)), kW, kH);
+    ASSERT_TRUE(p);
+    EXPECT_TRUE(is_body(pixel(img, *p))) << name(s) << " at " << p->transpose();
+  }
+  // Somewhere the body is not: where the left shank would hang in a standing pose.
+  PoseFrame standing = f;
+  q.fill(Eigen::Quaternionf::Identity());
+  pose_from_joint_rotations(dims, q, Eigen::Vector3f(0, 1, 0.8f), standing);
+  const auto hanging =
+      cam.project(segment_midpoint(standing, dims, index(Segment::foot_l)), kW, kH);
+  ASSERT_TRUE(hanging);
+  EXPECT_FALSE(is_body(pixel(img, *hanging))) << "left foot drawn where a standing pose has it";
 }
 
 TEST_F(Render, MissingDaemonAndBadOptionsAreReported) {

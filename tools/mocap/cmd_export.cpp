@@ -11,22 +11,22 @@
 #include "commands.hpp"
 #include "mocap/core/cli_args.hpp"
 #include "mocap/daemon/config.hpp"
-#include "mocap/daemon/session_reader.hpp"
+#include "mocap/session/session_reader.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
 
 namespace mocap::cmd {
 namespace {
 
-constexpr const char* kUsage =
+constexpr const char* kExportUsage =
     "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh)\n"
     "Converts the poses recorded in SESSION. CSV columns: t (seconds since the recording\n"
     "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n"
     "BVH: N-pose rest, centimetres, the session's mean frame interval, the recorded body height.\n";
 
 /// Tells the user how reading ended when it did not end cleanly.
-void report_tail(const daemon::SessionReader& r, const std::string& path) {
-  using End = daemon::SessionReader::End;
+void report_tail(const SessionReader& r, const std::string& path) {
+  using End = SessionReader::End;
   if (r.end() == End::torn)
     std::fprintf(stderr,
                  "mocap export: %s: %s; the last %llu bytes (an unfinished write) were "
@@ -39,7 +39,7 @@ void report_tail(const daemon::SessionReader& r, const std::string& path) {
                  static_cast<unsigned long long>(r.ignored_bytes()));
 }
 
-int export_csv(daemon::SessionReader& r, const std::string& in, const std::string& out) {
+int export_csv(SessionReader& r, const std::string& in, const std::string& out) {
   std::FILE* f = std::fopen(out.c_str(), "w");
   if (!f) {
     std::fprintf(stderr, "mocap export: cannot create '%s': %s\n", out.c_str(),
@@ -48,10 +48,10 @@ int export_csv(daemon::SessionReader& r, const std::string& in, const std::strin
   }
   std::fprintf(f, "t,segment,w,x,y,z,px,py,pz\n");
   const int64_t t0 = r.header().t_start_host_ns;
-  daemon::SessionReader::Block b;
+  SessionReader::Block b;
   long frames = 0;
   while (r.next(b)) {
-    if (b.type != daemon::session::BlockType::pose) continue;
+    if (b.type != session::BlockType::pose) continue;
     const double t = static_cast<double>(b.pose.t_ns - t0) * 1e-9;
     for (int s = 0; s < kSegmentCount; ++s) {
       const auto& q = b.pose.q_earth_segment[s];
@@ -79,7 +79,7 @@ int export_csv(daemon::SessionReader& r, const std::string& in, const std::strin
 
 /// Body height from the configuration recorded in the session (the one the poses were
 /// computed with); the default height, with a warning, if it does not parse.
-double recorded_height_m(const daemon::SessionReader& r, const std::string& in) {
+double recorded_height_m(const SessionReader& r, const std::string& in) {
   daemon::ConfigErrors errors;
   const auto cfg =
       daemon::parse_config(r.header().config_text, in + " (recorded config)", {}, errors);
@@ -93,13 +93,13 @@ double recorded_height_m(const daemon::SessionReader& r, const std::string& in) 
   return fallback;
 }
 
-int export_bvh(daemon::SessionReader& r, const std::string& in, const std::string& out) {
+int export_bvh(SessionReader& r, const std::string& in, const std::string& out) {
   // First pass: frame count and mean frame interval (BVH has one fixed frame time).
-  daemon::SessionReader::Block b;
+  SessionReader::Block b;
   long frames = 0;
   int64_t t_first = 0, t_last = 0;
   while (r.next(b)) {
-    if (b.type != daemon::session::BlockType::pose) continue;
+    if (b.type != session::BlockType::pose) continue;
     if (frames == 0) t_first = b.pose.t_ns;
     t_last = b.pose.t_ns;
     ++frames;
@@ -114,7 +114,7 @@ int export_bvh(daemon::SessionReader& r, const std::string& in, const std::strin
     opt.frame_time_s =
         static_cast<double>(t_last - t_first) * 1e-9 / static_cast<double>(frames - 1);
   const double height_m = recorded_height_m(r, in);
-  daemon::SessionReader again;
+  SessionReader again;
   std::string error;
   if (!again.open(in, &error)) {
     std::fprintf(stderr, "mocap export: %s\n", error.c_str());
@@ -123,7 +123,7 @@ int export_bvh(daemon::SessionReader& r, const std::string& in, const std::strin
   try {
     BvhWriter writer(out, BodyModel(body_dimensions_from_height(height_m)), opt);
     while (again.next(b))
-      if (b.type == daemon::session::BlockType::pose) writer.write_frame(b.pose);
+      if (b.type == session::BlockType::pose) writer.write_frame(b.pose);
     writer.close();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mocap export: %s\n", e.what());
@@ -142,19 +142,19 @@ int run_export(int argc, char** argv) {
       .option("bvh", "write the poses as BVH to this file")
       .flag("help", "show this help");
   if (!args.parse(argc, argv, 1)) {
-    std::fprintf(stderr, "mocap export: %s\n%s", args.error().c_str(), kUsage);
+    std::fprintf(stderr, "mocap export: %s\n%s", args.error().c_str(), kExportUsage);
     return 2;
   }
   if (args.has("help")) {
-    std::printf("%s%s", kUsage, args.help().c_str());
+    std::printf("%s%s", kExportUsage, args.help().c_str());
     return 0;
   }
   if (args.positional().size() != 1 || args.has("csv") == args.has("bvh")) {
-    std::fprintf(stderr, "%s", kUsage);
+    std::fprintf(stderr, "%s", kExportUsage);
     return 2;
   }
   const std::string in = args.positional()[0];
-  daemon::SessionReader reader;
+  SessionReader reader;
   std::string error;
   if (!reader.open(in, &error)) {
     std::fprintf(stderr, "mocap export: %s\n", error.c_str());

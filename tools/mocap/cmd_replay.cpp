@@ -13,6 +13,7 @@
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/poses_csv.hpp"
+#include "mocap/daemon/prefetch_source.hpp"
 #include "mocap/daemon/replay.hpp"
 #include "mocap/daemon/rig_engine.hpp"
 #include "mocap/skeleton/body_model.hpp"
@@ -118,6 +119,8 @@ int run_replay(int argc, char** argv) {
       src = open_session_source(input, rig ? &*rig : nullptr, which);
     else
       src = open_sample_source(input, rig ? &*rig : nullptr);
+    // Read and decode the file on the other core while this one filters and solves.
+    src = std::make_unique<PrefetchSource>(std::move(src));
     Config cfg = src->config();
     // Calibrate immediately at the chosen moment (the file is the countdown).
     cfg.calibration.countdown_s = 0;

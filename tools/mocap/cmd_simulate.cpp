@@ -15,7 +15,7 @@ namespace mocap::cmd {
 
 namespace {
 
-constexpr const char* kUsage =
+constexpr const char* kSimulateUsage =
     "usage: mocap simulate --protocol witmotion|xbus|ds4|dualsense|joycon|line\n"
     "                      (--pty [--link PATH] | --udp HOST:PORT | --out FILE --samples N)\n"
     "                      [--motion static|rotate|FILE.csv] [--rate HZ] [--option KEY=VALUE]...\n"
@@ -92,11 +92,11 @@ int run_simulate(int argc, char** argv) {
       .multi("option", "protocol option KEY=VALUE (e.g. quat_order=xyzw)")
       .flag("help", "show this help");
   if (!args.parse(argc, argv)) {
-    std::fprintf(stderr, "mocap simulate: %s\n%s", args.error().c_str(), kUsage);
+    std::fprintf(stderr, "mocap simulate: %s\n%s", args.error().c_str(), kSimulateUsage);
     return 2;
   }
   if (args.has("help")) {
-    std::printf("%s%s", kUsage, args.help().c_str());
+    std::printf("%s%s", kSimulateUsage, args.help().c_str());
     return 0;
   }
   SimOptions so;
@@ -104,7 +104,7 @@ int run_simulate(int argc, char** argv) {
   so.motion = args.get_or("motion", "rotate");
   double duration = 0;
   if (so.protocol.empty()) {
-    std::fprintf(stderr, "mocap simulate: --protocol is required\n%s", kUsage);
+    std::fprintf(stderr, "mocap simulate: --protocol is required\n%s", kSimulateUsage);
     return 2;
   }
   if ((args.has("rate") && !args.get_double("rate", so.rate_hz)) ||
@@ -115,7 +115,8 @@ int run_simulate(int argc, char** argv) {
   }
   const int modes = args.has("pty") + args.has("udp") + args.has("out");
   if (modes != 1) {
-    std::fprintf(stderr, "mocap simulate: give exactly one of --pty, --udp, --out\n%s", kUsage);
+    std::fprintf(stderr, "mocap simulate: give exactly one of --pty, --udp, --out\n%s",
+                 kSimulateUsage);
     return 2;
   }
   try {

@@ -26,9 +26,7 @@ int BvhSource::frame_at(double position_s) const {
 }
 
 bool BvhSource::poll(double t_s, std::vector<PoseFrame>& frames) {
-  if (!paused_) position_s_ += t_s - last_t_s_;
-  last_t_s_ = t_s;
-  const int k = frame_at(position_s_);
+  const int k = frame_at(advance(t_s));
   if (k == shown_ && !frames.empty()) return false;
   frames.resize(1);
   motion_->to_pose_frame(k, frames[0]);

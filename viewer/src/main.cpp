@@ -1,16 +1,31 @@
 // mocap-viewer: command line, pose source selection, then the window, screenshot or bench mode.
+#include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 
 #include "mocap/core/cli_args.hpp"
 #include "mocap/skeleton/posture_shm.hpp"
 #include "mocap/viewer/bvh_source.hpp"
 #include "mocap/viewer/net_source.hpp"
+#include "mocap/viewer/session_source.hpp"
 #include "mocap/viewer/shm_source.hpp"
 #include "mocap/viewer/synthetic_source.hpp"
 #include "viewer_options.hpp"
 
 namespace mocap::viewer {
+namespace {
+
+bool file_starts_with(const std::string& path, const char* prefix, std::size_t n) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;  // the source's own open reports why
+  char head[16] = {};
+  const std::size_t got = std::fread(head, 1, std::min(n, sizeof head), f);
+  std::fclose(f);
+  return got == n && std::memcmp(head, prefix, n) == 0;
+}
+
+}  // namespace
 
 std::unique_ptr<PoseSource> make_source(const ViewerOptions& o) {
   const BodyDimensions dims = body_dimensions_from_height(o.height_m);
@@ -20,10 +35,10 @@ std::unique_ptr<PoseSource> make_source(const ViewerOptions& o) {
                                                           : o.shm_name);
   if (o.source == "connect") return std::make_unique<NetSource>(o.connect);
   if (o.source == "play") {
-    if (o.play.size() >= 4 && o.play.compare(o.play.size() - 4, 4, ".bvh") == 0)
-      return std::make_unique<BvhSource>(o.play);
-    throw std::runtime_error("--play " + o.play +
-                             ": only BVH files (.bvh) can be played back so far");
+    // By content, not by name: a session starts with its signature, a BVH with HIERARCHY.
+    if (file_starts_with(o.play, session::kMagic, sizeof session::kMagic))
+      return std::make_unique<SessionSource>(o.play);
+    return std::make_unique<BvhSource>(o.play);
   }
   throw std::runtime_error("unknown --source '" + o.source + "' (shm, synthetic)");
 }

@@ -1,6 +1,6 @@
 // Checks text before it reaches a parser that assumes well-formed input (toml++ 3.3 has
 // undefined behaviour on some malformed UTF-8): rejects NUL bytes and invalid UTF-8, naming
-// the line and column of the first bad byte.
+// the line and column of the first bad byte. Also the small text helpers the line parsers share.
 #pragma once
 
 #include <optional>
@@ -23,5 +23,14 @@ struct TextProblem {
 /// problem too: toml++ 3.3 reaches __builtin_unreachable on valid code points such as U+03CF
 /// after a value, so TOML text is restricted to ASCII (found by fuzzing).
 std::optional<TextProblem> text_problem(std::string_view text, bool ascii_only = false);
+
+/// `s` without leading and trailing spaces and tabs.
+constexpr std::string_view trim_blanks(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t'))
+    s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t'))
+    s.remove_suffix(1);
+  return s;
+}
 
 }  // namespace mocap

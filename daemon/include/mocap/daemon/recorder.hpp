@@ -9,7 +9,7 @@
 
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/daemon.hpp"
-#include "mocap/daemon/session_writer.hpp"
+#include "mocap/session/session_writer.hpp"
 
 namespace mocap::daemon {
 

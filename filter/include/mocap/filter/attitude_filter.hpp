@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "mocap/core/imu_sample.hpp"
+#include "mocap/filter/latency_estimator.hpp"
 #include "mocap/filter/lowpass.hpp"
 
 namespace mocap {
@@ -19,11 +20,14 @@ struct FilterParams {
   // --- inclination and heading ---
   double tau_acc_s = 3.0;  ///< low-pass of acc in the almost-inertial frame (inclination)
   double tau_mag_s = 9.0;  ///< nominal heading time constant in an undisturbed field
+  /// Kalman heading: steady-state one-sigma heading uncertainty in an undisturbed field (sets
+  /// the process and measurement noise together with tau_mag_s).
+  double heading_sigma_deg = 1.0;
   /// Adaptive inclination: a second, faster low-pass (tau_acc_fast_s) is blended in when
   /// gyro errors (which grow with the rotation rate w) outweigh linear-acceleration errors
   /// (which grow with the linear acceleration a). Fast weight: rho^2 / (rho^2 + rho_ref^2),
   /// rho = RMS(w) / RMS(a) over acc_dyn_tau_s (a = |acc_I - LP(acc_I)|). 0 disables.
-  double tau_acc_fast_s = 2.0;
+  double tau_acc_fast_s = 0.0;              // off: made redundant by the gyro-gain estimate
   double acc_dyn_ref_rad_s_per_m_s2 = 1.0;  ///< rho_ref, (rad/s) per (m/s^2)
   double acc_dyn_tau_s = 1.0;
   // --- gyro bias (Kalman filter, sigma values in deg/s) ---
@@ -35,6 +39,14 @@ struct FilterParams {
   double bias_sigma_motion_deg_s = 0.1;  ///< measurement noise of the motion update
   double bias_vertical_forgetting = 1e-4;  ///< vertical bias pseudo-measurement weight
   double bias_sigma_rest_deg_s = 0.03;     ///< measurement noise of the rest update
+  // --- gyro gain (scale factor and misalignment, ours) ---
+  /// The gyro reads (I + G) w + b. The motion bias update's inclination corrections also see
+  /// G w, which grows with the rotation rate, so a 9-state Kalman filter estimates G from
+  /// the same corrections (regressor: low-passed R w^T) and the gyro is corrected by it.
+  /// gyr_gain_sigma_init is the prior one-sigma per matrix entry (0 disables).
+  double gyr_gain_sigma_init = 0.02;
+  double gyr_gain_forgetting_time_s = 100;  ///< time for the uncertainty to grow by 0.001
+  double gyr_gain_clip = 0.05;              ///< largest estimate per matrix entry
   // --- rest detection ---
   double rest_min_t_s = 1.5;       ///< rest must hold this long
   double rest_filter_tau_s = 0.5;  ///< low-pass for the rest deviations
@@ -55,13 +67,17 @@ struct FilterParams {
   double mag_min_undisturbed_time_s = 0.5;
   double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
   double mag_rejection_factor = 2.0;       ///< gain divisor after that
+  /// Soft trust: the heading measurement variance is multiplied by 1 + score, score =
+  /// mag_trust_weight * ((norm dev / mag_norm_th)^2 + (dip dev / mag_dip_th_deg)^2)
+  /// + (rejection time not yet repaid) / tau_mag_s (+ the consistency term below).
+  double mag_trust_weight = 3.0;
   // --- extensions beyond VQF (false/0 = plain VQF behaviour) ---
   /// Gyro-consistency test: in a homogeneous field the magnetometer vector seen in the
   /// almost-inertial frame (gyro only, no inclination involved) stays constant. Its RMS
-  /// deviation from its own mean over mag_consistency_tau_s, relative to the field norm, above
-  /// this threshold marks the field as disturbed (gradients, magnets moving with the sensor).
-  /// 0 disables: the default, because on BROAD rejecting more often cost more accuracy (fast
-  /// rotation needs magnetometer updates) than it saved; kept for experiments.
+  /// deviation from its own mean over mag_consistency_tau_s, relative to the field norm and
+  /// to this threshold, squared, adds to the soft-trust score (gradients, magnets moving with
+  /// the sensor). 0 disables: the default, because on BROAD distrusting the field more often
+  /// cost more accuracy (fast rotation needs magnetometer updates) than it saved.
   double mag_consistency_th = 0.0;
   double mag_consistency_tau_s = 1.0;  ///< averaging window of that test
   /// Online hard-iron estimation (a sensor-fixed field offset h, e.g. a magnet on the housing):
@@ -73,6 +89,17 @@ struct FilterParams {
   double hard_iron_tau_s = 0.0;  // off: on BROAD it fitted room-field gradients as h
   double hard_iron_min_excitation = 0.3;
   double hard_iron_max_residual = 0.03;
+  // --- magnetometer latency (ours) ---
+  /// A magnetometer often samples the motion later than the gyro (longer integration,
+  /// internal filters): during fast rotation its heading then lags. The latency is
+  /// estimated online from the field itself (filt::LatencyEstimator: high-passed over
+  /// mag_latency_hp_tau_s, averaged over mag_latency_tau_s, shrunk towards 0 below
+  /// mag_latency_min_rate_deg_s of rotation) and the field is rotated back by w * latency.
+  /// mag_latency_tau_s = 0 disables.
+  double mag_latency_tau_s = 30.0;
+  double mag_latency_hp_tau_s = 0.5;
+  double mag_latency_min_rate_deg_s = 30.0;
+  double mag_latency_max_s = 0.05;  ///< largest latency compensated
   // --- input handling ---
   double max_gap_s = 0.25;      ///< longer gaps integrate the gyro only over this span
   double max_gyr_rad_s = 70.0;  ///< |gyr| above this is rejected (about 4000 deg/s)
@@ -97,11 +124,16 @@ struct FilterCoeffs {
   double k_acc_dyn = 0;
   double k_hard_iron = 0;
   double k_mag = 0, k_mag_ref = 0, k_mag_consistency = 0;
+  double k_latency = 0, k_latency_hp = 0;
   int bias_decim = 1;           ///< bias KF runs every bias_decim acc samples (about 100 Hz)
   double bias_ts_s = 0;         ///< its period
   filt::LowpassCoeffs bias_lp;  ///< tau_acc low-pass at the bias KF rate
   double bias_p0 = 0, bias_v = 0, bias_motion_w = 0, bias_vertical_w = 0, bias_rest_w = 0;
   double heading_q_rad2_s = 0, heading_r0_rad2 = 0;
+  int gain_reg_decim = 1;  ///< its regressor is low-passed every gain_reg_decim bias steps
+  filt::LowpassCoeffs gain_reg_lp;
+  int gain_decim = 1;  ///< gyro-gain KF runs every gain_decim bias steps (about 10 Hz)
+  double gain_p0 = 0, gain_v = 0, gain_w = 0;
 };
 
 /// Everything that evolves; can be saved and restored (plain data).
@@ -115,6 +147,7 @@ struct FilterState {
   int64_t t_gyr_ns = 0, t_acc_ns = 0, t_mag_ns = 0;
   double gyr_ts_nom_s = 0, acc_ts_nom_s = 0, mag_ts_nom_s = 0;  ///< tracked sampling periods
   Eigen::Vector3d last_gyr_rad_s = Eigen::Vector3d::Zero();
+  filt::LatencyEstimator mag_latency;
   // inclination
   filt::Lowpass<3> acc_lp, acc_fast_lp;
   double acc_dyn_m2_s4 = 0;    ///< smoothed squared linear-acceleration estimate
@@ -128,6 +161,16 @@ struct FilterState {
   Eigen::Vector2d bias_corr_sum = Eigen::Vector2d::Zero();  ///< horizontal corrections summed
   filt::Lowpass<9> motion_r_lp;
   filt::Lowpass<2> motion_bias_lp;
+  // gyro gain G (row-major 3x3, gyro reads (I + G) w + b) and its Kalman filter
+  Eigen::Matrix<double, 9, 1> gain = Eigen::Matrix<double, 9, 1>::Zero();
+  Eigen::Matrix<double, 9, 9> gain_p = Eigen::Matrix<double, 9, 9>::Zero();  ///< in gain^2
+  bool gain_p_init = false;
+  int gain_n = 0;                                           ///< bias steps since the last
+  Eigen::Vector3d gyr_sum_rad_s = Eigen::Vector3d::Zero();  ///< gyro summed over a bias block
+  filt::Lowpass<18> gain_reg_lp;  ///< low-pass of the regressor R_ri w_j, rows 0 and 1 of R
+  Eigen::Matrix<double, 2, 9> gain_reg = Eigen::Matrix<double, 2, 9>::Zero();      ///< its output
+  Eigen::Matrix<double, 2, 9> gain_reg_sum = Eigen::Matrix<double, 2, 9>::Zero();  ///< block sum
+  int gain_reg_n = 0;
   // rest
   bool rest = false;
   double rest_t_s = 0;
@@ -170,6 +213,9 @@ class AttitudeFilter {
   bool at_rest() const { return st_.rest; }
   bool mag_disturbed() const { return st_.have_mag && st_.mag_disturbed; }
   Eigen::Vector3d gyro_bias_rad_s() const { return st_.bias_rad_s; }
+  /// Estimated gyro gain error G (scale on the diagonal, misalignment off it): the gyro reads
+  /// (I + G) w + bias; the filter integrates the rate corrected by it.
+  Eigen::Matrix3d gyro_gain() const;
   /// One-sigma heading uncertainty of the 9D output, rad (large before any magnetometer).
   double heading_sigma_rad() const;
 
@@ -185,6 +231,8 @@ class AttitudeFilter {
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
   void update_hard_iron(const Eigen::Vector3d& mag);
   void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
+  void update_gain(const Eigen::Vector2d& residual, const Eigen::Matrix<double, 2, 9>& reg,
+                   const Eigen::Matrix3d& r_lp);
   bool stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double& ts_nom, double& dt_s);
   void refresh_coeffs();
 

@@ -9,15 +9,12 @@
 
 namespace mocap::viewer {
 
-class BvhSource final : public PoseSource {
+class BvhSource final : public PlaybackSource {
  public:
   /// Loads and maps the file; throws std::runtime_error naming the file and the problem.
   explicit BvhSource(const std::string& path);
   bool poll(double t_s, std::vector<PoseFrame>& frames) override;
   std::string status() const override;
-  bool seekable() const override { return true; }
-  void set_paused(bool paused) override { paused_ = paused; }
-  void seek_by(double dt_s) override { position_s_ += dt_s; }
   const BodyDimensions* dimensions() const override { return &motion_->dimensions(); }
 
   /// Frame index shown at playback position `position_s` (wraps around the clip).
@@ -26,8 +23,6 @@ class BvhSource final : public PoseSource {
  private:
   std::string name_;
   std::unique_ptr<BvhMotion> motion_;
-  bool paused_ = false;
-  double position_s_ = 0, last_t_s_ = 0;
   int shown_ = -1;
 };
 

@@ -31,6 +31,27 @@ class PoseSource {
   virtual const BodyDimensions* dimensions() const { return nullptr; }
 };
 
+/// A file played back on a clock of its own: pause and seek move the playback position, which
+/// the file source maps to one of its frames.
+class PlaybackSource : public PoseSource {
+ public:
+  bool seekable() const override { return true; }
+  void set_paused(bool paused) override { paused_ = paused; }
+  void seek_by(double dt_s) override { position_s_ += dt_s; }
+
+ protected:
+  /// Advances the playback position to viewer time t_s (unless paused) and returns it.
+  double advance(double t_s) {
+    if (!paused_) position_s_ += t_s - last_t_s_;
+    last_t_s_ = t_s;
+    return position_s_;
+  }
+
+ private:
+  bool paused_ = false;
+  double position_s_ = 0, last_t_s_ = 0;
+};
+
 /// Fills a PoseFrame's earth orientations and joint positions from joint rotations
 /// (q_parent_segment, pelvis = q_earth_pelvis) and the pelvis position, by forward kinematics
 /// over the body dimensions. Leaves flags and sensors untouched.

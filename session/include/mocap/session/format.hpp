@@ -12,7 +12,7 @@
 #include "mocap/core/imu_sample.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
-namespace mocap::daemon::session {
+namespace mocap::session {
 
 inline constexpr char kMagic[8] = {'M', 'O', 'C', 'A', 'P', 'S', 'E', 'S'};
 inline constexpr uint32_t kVersion = 1;
@@ -106,4 +106,4 @@ inline uint64_t get_u64(const uint8_t* p) {
   return v;
 }
 
-}  // namespace mocap::daemon::session
+}  // namespace mocap::session

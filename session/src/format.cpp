@@ -1,6 +1,6 @@
 // Session file codec: the header and the block payloads in explicit little-endian layout
 // (docs/session-format.md). Every field is written one by one, never memcpy of a struct.
-#include "mocap/daemon/session.hpp"
+#include "mocap/session/format.hpp"
 
 #include <zlib.h>
 
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <cstring>
 
-namespace mocap::daemon::session {
+namespace mocap::session {
 namespace {
 
 /// Sequential little-endian writer over a caller buffer (sized by the caller).
@@ -284,4 +284,4 @@ void encode_block_header(BlockType type, uint32_t payload_len, uint8_t* out) noe
   w.u32(payload_len);
 }
 
-}  // namespace mocap::daemon::session
+}  // namespace mocap::session

@@ -1,6 +1,6 @@
 // SessionReader: header validation (magic, byte order, version, limits, CRC) and block
 // iteration that stops at the first torn or corrupt block, classifying and locating it.
-#include "mocap/daemon/session_reader.hpp"
+#include "mocap/session/session_reader.hpp"
 
 #include <sys/stat.h>
 #include <zlib.h>
@@ -9,7 +9,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace mocap::daemon {
+namespace mocap {
 
 using namespace session;
 
@@ -87,7 +87,7 @@ bool SessionReader::read_header(const std::string& name, std::string* error) {
     return fail("session header checksum mismatch (file damaged)");
   std::string msg;
   if (!decode_header_payload({buf.data() + sizeof fixed, len}, header_, &msg)) return fail(msg);
-  offset_ = buf.size();
+  offset_ = header_bytes_ = buf.size();
   payload_.resize(kMaxBlockPayload + kBlockTrailerBytes);
   return true;
 }
@@ -98,35 +98,47 @@ bool SessionReader::stop(End end, std::string reason) {
   return false;
 }
 
+bool SessionReader::seek(uint64_t offset) {
+  if (offset < header_bytes_ || offset > size_) return false;
+  // Files are read sequentially (read_at ignores the offset for them): move the stream too.
+  if (file_ && ::fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0) return false;
+  offset_ = offset;
+  end_ = End::not_reached;
+  tail_reason_.clear();
+  return true;
+}
+
 bool SessionReader::next(Block& block) {
   if (end_ != End::not_reached) return false;
   if (!file_ && memory_.empty()) return stop(End::corrupt, "no session open");
   for (;;) {
-    const std::string at = " at offset " + std::to_string(offset_);
+    // Built only when reading stops: a string per block would cost an allocation per sample.
+    const auto at = [this] { return " at offset " + std::to_string(offset_); };
     uint8_t hdr[kBlockHeaderBytes];
     const std::size_t got = read_at(file_, memory_, offset_, hdr, sizeof hdr);
     if (got == 0) return stop(End::clean, "");
-    if (got < sizeof hdr) return stop(End::torn, "incomplete block header" + at);
+    if (got < sizeof hdr) return stop(End::torn, "incomplete block header" + at());
     if (get_u16(hdr) != kBlockSync) {
       const bool zeros = std::all_of(hdr, hdr + sizeof hdr, [](uint8_t b) { return b == 0; });
       return stop(zeros ? End::torn : End::corrupt,
-                  (zeros ? "zero-filled tail" : "no block marker") + at);
+                  (zeros ? "zero-filled tail" : "no block marker") + at());
     }
     const uint32_t len = get_u32(hdr + 4);
     if (len > kMaxBlockPayload)
-      return stop(End::corrupt, "block length " + std::to_string(len) + " exceeds the limit" + at);
+      return stop(End::corrupt,
+                  "block length " + std::to_string(len) + " exceeds the limit" + at());
     const std::size_t want = len + kBlockTrailerBytes;
     const std::size_t have = read_at(file_, memory_, offset_ + sizeof hdr, payload_.data(), want);
     if (have < want)
       return stop(End::torn, "last block truncated (" + std::to_string(have) + " of " +
-                                 std::to_string(want) + " bytes)" + at);
+                                 std::to_string(want) + " bytes)" + at());
     uLong crc = crc32(0L, hdr, sizeof hdr);
     crc = crc32(crc, payload_.data(), len);
     const uint64_t block_end = offset_ + sizeof hdr + want;
     if (static_cast<uint32_t>(crc) != get_u32(payload_.data() + len))
       return stop(
           block_end == size_ ? End::torn : End::corrupt,
-          std::string(block_end == size_ ? "last block" : "block") + " fails its checksum" + at);
+          std::string(block_end == size_ ? "last block" : "block") + " fails its checksum" + at());
     const std::span<const uint8_t> payload(payload_.data(), len);
     block.offset = offset_;
     block.type = static_cast<BlockType>(hdr[2]);
@@ -151,10 +163,10 @@ bool SessionReader::next(Block& block) {
         offset_ = block_end;
         continue;
     }
-    if (!ok) return stop(End::corrupt, "block does not decode (bad size or value)" + at);
+    if (!ok) return stop(End::corrupt, "block does not decode (bad size or value)" + at());
     offset_ = block_end;
     return true;
   }
 }
 
-}  // namespace mocap::daemon
+}  // namespace mocap

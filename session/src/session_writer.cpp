@@ -1,7 +1,7 @@
 // SessionWriter: preallocated ring hand-off from the pipeline to a writer thread that appends
 // the ring to the session file and fdatasync()s it every flush interval; write errors stop the
 // recording cleanly (the torn last block is cut off so the file ends on a whole block).
-#include "mocap/daemon/session_writer.hpp"
+#include "mocap/session/session_writer.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -12,7 +12,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace mocap::daemon {
+namespace mocap {
 namespace {
 
 /// Writes all of [data, data+len); returns 0 or the errno of the failure, and how much went out.
@@ -251,4 +251,4 @@ SessionWriter::Stats SessionWriter::stats() const {
   return s;
 }
 
-}  // namespace mocap::daemon
+}  // namespace mocap

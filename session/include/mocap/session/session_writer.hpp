@@ -16,9 +16,9 @@
 #include <string>
 #include <thread>
 
-#include "mocap/daemon/session.hpp"
+#include "mocap/session/format.hpp"
 
-namespace mocap::daemon {
+namespace mocap {
 
 class SessionWriter {
  public:
@@ -94,4 +94,4 @@ class SessionWriter {
   std::thread thread_;
 };
 
-}  // namespace mocap::daemon
+}  // namespace mocap

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "mocap/daemon/session.hpp"
+#include "mocap/session/format.hpp"
 
-namespace mocap::daemon {
+namespace mocap {
 
 class SessionReader {
  public:
@@ -48,6 +48,10 @@ class SessionReader {
   /// Reads the next block; false at the end of the good data (see end(), tail_offset()).
   bool next(Block& block);
 
+  /// Continues reading at `offset`, the offset of a block returned earlier by next() (random
+  /// access for playback). False, and nothing changes, if it lies outside the file's blocks.
+  bool seek(uint64_t offset);
+
   End end() const { return end_; }
   /// Offset of the first byte not part of a good block (the file size after a clean end).
   uint64_t tail_offset() const { return offset_; }
@@ -66,6 +70,7 @@ class SessionReader {
   std::vector<uint8_t> memory_;
   uint64_t size_ = 0;
   uint64_t offset_ = 0;
+  uint64_t header_bytes_ = 0;  ///< offset of the first block
   session::SessionHeader header_;
   std::vector<uint8_t> payload_;
   End end_ = End::not_reached;
@@ -73,4 +78,4 @@ class SessionReader {
   uint64_t unknown_blocks_ = 0;
 };
 
-}  // namespace mocap::daemon
+}  // namespace mocap
