@@ -15,7 +15,7 @@
 namespace mocap {
 namespace {
 
-constexpr int64_t kMs = 1'000'000;
+using test::kMs;
 
 double angle_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
   return 2 * std::acos(std::min(1.0, std::abs(a.dot(b)))) * kRadToDeg;
