@@ -11,8 +11,8 @@
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/sample_csv.hpp"
-#include "mocap/session/session_reader.hpp"
 #include "mocap/drivers/device.hpp"
+#include "mocap/session/session_reader.hpp"
 
 namespace mocap::daemon {
 
