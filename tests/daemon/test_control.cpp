@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "../common/raw_unix_call.hpp"
 #include "mocap/daemon/control.hpp"
 
 using namespace mocap;
@@ -21,29 +22,6 @@ std::string temp_socket(const char* tag) {
   return (std::filesystem::temp_directory_path() /
           ("mocapd-test-" + std::to_string(getpid()) + "-" + tag + ".sock"))
       .string();
-}
-
-/// Sends raw bytes (no newline added) and returns the reply.
-std::string raw_call(const std::string& path, const std::string& bytes, bool half_close) {
-  int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
-  sockaddr_un a{};
-  a.sun_family = AF_UNIX;
-  std::strcpy(a.sun_path, path.c_str());
-  EXPECT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  size_t off = 0;
-  while (off < bytes.size()) {
-    ssize_t n = ::send(fd, bytes.data() + off, bytes.size() - off, MSG_NOSIGNAL);
-    if (n <= 0) break;  // the server may close early on an oversized request
-    off += static_cast<size_t>(n);
-  }
-  if (half_close) ::shutdown(fd, SHUT_WR);
-  std::string reply;
-  char buf[1024];
-  ssize_t n;
-  while ((n = ::recv(fd, buf, sizeof buf, 0)) > 0)
-    reply.append(buf, static_cast<size_t>(n));
-  ::close(fd);
-  return reply;
 }
 
 }  // namespace
@@ -109,12 +87,12 @@ TEST(ControlServer, ServesRequestsOverARealSocket) {
   // Malformed, oversized and incomplete requests get error replies; the server keeps going.
   j = nlohmann::json::parse(control_call(path, "fly away"));
   EXPECT_FALSE(j["ok"].get<bool>());
-  j = nlohmann::json::parse(raw_call(path, std::string(20000, 'x') + "\n", false));
+  j = nlohmann::json::parse(test::raw_unix_call(path, std::string(20000, 'x') + "\n", false));
   EXPECT_FALSE(j["ok"].get<bool>());
   EXPECT_NE(j["error"].get<std::string>().find("too long"), std::string::npos);
-  j = nlohmann::json::parse(raw_call(path, "", true));
+  j = nlohmann::json::parse(test::raw_unix_call(path, "", true));
   EXPECT_FALSE(j["ok"].get<bool>());
-  j = nlohmann::json::parse(raw_call(path, std::string("\xff\xfe\x01\n"), false));
+  j = nlohmann::json::parse(test::raw_unix_call(path, std::string("\xff\xfe\x01\n"), false));
   EXPECT_FALSE(j["ok"].get<bool>());
 
   j = nlohmann::json::parse(control_call(path, "status"));

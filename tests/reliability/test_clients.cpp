@@ -16,44 +16,11 @@
 #include <memory>
 #include <thread>
 
+#include "../common/raw_unix_call.hpp"
 #include "harness.hpp"
 
 using namespace mocap::reliability;
 using namespace std::chrono_literals;
-
-namespace {
-
-/// Sends raw bytes to the control socket (no newline added) and returns the reply ("" if the
-/// daemon closed without one).
-std::string raw_control(const std::string& path, const std::string& bytes) {
-  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  sockaddr_un a{};
-  a.sun_family = AF_UNIX;
-  std::strncpy(a.sun_path, path.c_str(), sizeof a.sun_path - 1);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
-    ::close(fd);
-    return "connect: " + std::string(std::strerror(errno));
-  }
-  timeval tv{5, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-  ::setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
-  size_t off = 0;
-  while (off < bytes.size()) {
-    const ssize_t n = ::send(fd, bytes.data() + off, bytes.size() - off, MSG_NOSIGNAL);
-    if (n <= 0) break;
-    off += static_cast<size_t>(n);
-  }
-  ::shutdown(fd, SHUT_WR);
-  std::string reply;
-  char buf[4096];
-  ssize_t n;
-  while ((n = ::recv(fd, buf, sizeof buf, 0)) > 0)
-    reply.append(buf, static_cast<size_t>(n));
-  ::close(fd);
-  return reply;
-}
-
-}  // namespace
 
 TEST(Clients, ManyStreamClientsASilentOneAndAChurningLoopLoseNoFrames) {
   TempDir dir;
@@ -117,9 +84,11 @@ TEST(Clients, ManyStreamClientsASilentOneAndAChurningLoopLoseNoFrames) {
       },
       10s);
   EXPECT_TRUE(all_advance);
-  if (!all_advance)
-    for (size_t i = 0; i < clients.size(); ++i)
+  if (!all_advance) {
+    for (size_t i = 0; i < clients.size(); ++i) {
       EXPECT_GT(clients[i]->lines(), seen[i]) << "client " << i << " stopped receiving";
+    }
+  }
   EXPECT_TRUE(d.status().value("ok", false));
   std::printf(
       "[figures] 100 stream clients + 1 silent + %d churned connections over 3 s: "
@@ -154,7 +123,7 @@ TEST(Clients, MalformedAndOversizedControlRequestsGetErrorsAndTheDaemonCarriesOn
   };
   int errors = 0;
   for (const auto& req : bad) {
-    const std::string reply = raw_control(d.socket(), req);
+    const std::string reply = mocap::test::raw_unix_call(d.socket(), req);
     if (reply.empty()) continue;  // closing without a reply is acceptable for garbage
     const auto j = nlohmann::json::parse(reply, nullptr, false);
     ASSERT_FALSE(j.is_discarded()) << "reply is not JSON: " << reply.substr(0, 200);
