@@ -34,7 +34,8 @@ namespace {
 
 struct Line {
   int64_t t_recv_ns;
-  int64_t t_frame_ns;      ///< the line's "t": in per-sample mode, when mocapd read the sample
+  int64_t t_frame_ns;  ///< the line's "t": the sample's host time (read time mapped from the device
+                       ///< clock, <= read)
   uint32_t zero_age_mask;  ///< sensors shown with age_ms 0.0 (the sample that made the frame)
 };
 
@@ -186,7 +187,7 @@ int run_latency(int argc, char** argv) {
     // Match: per sensor, the k-th write -> the first later line showing that sensor at age 0.
     std::vector<double> lat_ms;
     lat_ms.reserve(static_cast<size_t>(sensors * periods));
-    std::vector<double> to_read_ms, from_read_ms;  // split at mocapd's read timestamp
+    std::vector<double> to_read_ms, from_read_ms;  // split at the sample's host time
     to_read_ms.reserve(lat_ms.capacity());
     from_read_ms.reserve(lat_ms.capacity());
     uint64_t unmatched = 0;
@@ -223,8 +224,8 @@ int run_latency(int argc, char** argv) {
         " \"written\":%llu,\"matched\":%zu,\"unmatched\":%llu,\"short_writes\":%llu,"
         "\"json_lines\":%zu,\"daemon_ring_drops\":%lld,\n"
         " \"latency_ms\":{\"p50\":%.4f,\"p99\":%.4f,\"max\":%.4f},\n"
-        " \"split_ms\":{\"write_to_read\":{\"p50\":%.4f,\"p99\":%.4f},"
-        "\"read_to_client\":{\"p50\":%.4f,\"p99\":%.4f}},\n"
+        " \"split_ms\":{\"write_to_sample_t\":{\"p50\":%.4f,\"p99\":%.4f},"
+        "\"sample_t_to_client\":{\"p50\":%.4f,\"p99\":%.4f}},\n"
         " \"goal\":{\"p50_ms\":0.3,\"p99_ms\":1.0},\"pass\":%s,\n"
         " \"load_average_1m\":{\"before\":%.2f,\"after\":%.2f}}\n",
         sensors, rate, seconds, ro.realtime_priority, static_cast<unsigned long long>(written),
