@@ -72,6 +72,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   Calibrator calibrator(rig, copt);
   SkeletonOptions sopt;
   sopt.hinge_refine = o.hinge_refine;
+  sopt.heading_coupling = o.heading_coupling;
   Skeleton skeleton(BodyModel(perf.dims()), default_joint_limits(), rig, sopt);
 
   const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
@@ -197,6 +198,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   const Calibration& used = skeleton.calibration();
   r.hinges_identified = skeleton.hinge_refiner().valid_hinges();
   r.hinges = skeleton.hinge_refiner().hinges();
+  r.coupling = skeleton.heading_coupling().hinges();
   for (int id = 0; id < Performer::kSensorCount; ++id) {
     const int s = index(Performer::sensor_segment(id));
     const Eigen::Quaterniond& q_seg_sensor = perf.mount(id).q_segment_sensor;
