@@ -434,11 +434,21 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       if ((st_.mag_ref_norm == 0 && !p_.mag_first_needs_rotation) ||
           st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kDeg)
         st_.mag_cand_t_s += ts;
+      st_.mag_cand_age_s += ts;
       st_.mag_cand_norm += c_.k_mag_ref * (norm - st_.mag_cand_norm);
       st_.mag_cand_dip += c_.k_mag_ref * (dip - st_.mag_cand_dip);
       if (st_.mag_disturbed &&
           (st_.mag_cand_t_s >= p_.mag_new_time_s ||
            (st_.mag_ref_norm == 0 && st_.mag_cand_t_s >= p_.mag_new_first_time_s))) {
+        if (!st_.mag_have_ref) {
+          // End of start-up: converge afresh on samples that pass the tests from now on.
+          // The schedule restarts at the gain the heading variance implies (1 after a full
+          // reset, about the Kalman gain when the provisional heading is kept).
+          st_.mag_have_ref = true;
+          const double s0 = p_.mag_first_ref_sigma_deg * kDeg;
+          st_.delta_var_rad2 = std::max(st_.delta_var_rad2, s0 * s0);
+          st_.k_mag_init = st_.delta_var_rad2 / (st_.delta_var_rad2 + c_.heading_r0_rad2);
+        }
         st_.mag_ref_norm = st_.mag_cand_norm;
         st_.mag_ref_dip = st_.mag_cand_dip;
         st_.mag_disturbed = false;
@@ -446,6 +456,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       }
     } else {
       st_.mag_cand_t_s = 0;
+      st_.mag_cand_age_s = 0;
       st_.mag_cand_norm = norm;
       st_.mag_cand_dip = dip;
     }
@@ -470,10 +481,13 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
   st_.delta_var_rad2 += (c_.heading_q_rad2_s + sb2) * (dt_s > 0 ? dt_s : ts);  // real gap
   double r = c_.heading_r0_rad2;
-  if (p_.mag_dist_rejection && st_.mag_ref_norm > 0) {
-    const double dn =
-        (st_.mag_norm_dip[0] - st_.mag_ref_norm) / (p_.mag_norm_th * st_.mag_ref_norm);
-    const double dd = (st_.mag_norm_dip[1] - st_.mag_ref_dip) / (p_.mag_dip_th_deg * kDeg);
+  if (p_.mag_dist_rejection && (st_.mag_ref_norm > 0 || st_.mag_cand_norm > 0)) {
+    // Deviations from the reference, or before one exists from the candidate.
+    const bool ref = st_.mag_ref_norm > 0;
+    const double rn = ref ? st_.mag_ref_norm : st_.mag_cand_norm;
+    const double rd = ref ? st_.mag_ref_dip : st_.mag_cand_dip;
+    const double dn = (st_.mag_norm_dip[0] - rn) / (p_.mag_norm_th * rn);
+    const double dd = (st_.mag_norm_dip[1] - rd) / (p_.mag_dip_th_deg * kDeg);
     double score = p_.mag_trust_weight * (dn * dn + dd * dd);
     if (p_.mag_consistency_th > 0)
       score += st_.mag_i_var_rel / (p_.mag_consistency_th * p_.mag_consistency_th);
@@ -482,8 +496,15 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     r *= 1.0 + score;
   }
   double k = st_.delta_var_rad2 / (st_.delta_var_rad2 + r);
+  bool use_init = true;  // the start-up schedule counts only samples that pass the tests
   if (p_.mag_dist_rejection) {
-    if (st_.mag_disturbed) {
+    if (!st_.mag_have_ref) {
+      // Provisional heading: follows the field only while it stays consistent with the
+      // candidate reference (a field whose norm or dip changes is no earth field).
+      use_init = false;
+      if (st_.mag_cand_age_s < p_.mag_min_undisturbed_time_s) k = 0;
+    } else if (st_.mag_disturbed) {
+      use_init = false;
       if (st_.mag_reject_t_s <= p_.mag_max_rejection_time_s) {
         st_.mag_reject_t_s += ts;
         k = 0;
@@ -494,7 +515,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       st_.mag_reject_t_s = std::max(st_.mag_reject_t_s - p_.mag_rejection_factor * ts, 0.0);
     }
   }
-  if (st_.k_mag_init != 0) {
+  if (st_.k_mag_init != 0 && use_init) {
     k = std::max(k, st_.k_mag_init);
     st_.k_mag_init = st_.k_mag_init / (st_.k_mag_init + 1);
     if (st_.k_mag_init * p_.tau_mag_s < ts) st_.k_mag_init = 0;
@@ -503,6 +524,18 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   // Joseph form: valid for the gains the rejection and start-up rules impose as well.
   st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * r;
   st_.q_delta = heading_quat(st_.delta_rad);
+}
+
+FilterOutput AttitudeFilter::output() const {
+  FilterOutput o;
+  o.q_earth_sensor = q_earth_sensor();
+  o.q_earth_sensor_6d = q_earth_sensor_6d();
+  o.gyro_bias_rad_s = st_.bias_rad_s;
+  o.heading_sigma_rad = heading_sigma_rad();
+  o.at_rest = st_.rest;
+  o.mag_disturbed = mag_disturbed();
+  o.mag_no_reference = mag_no_reference();
+  return o;
 }
 
 Eigen::Quaterniond AttitudeFilter::q_earth_sensor_6d() const {

@@ -64,6 +64,13 @@ struct FilterParams {
   /// VQF accepts even the first field only while rotating; ours accepts the first field at
   /// rest too (start-up stand-still = clean reference, full rejection budget for the session).
   bool mag_first_needs_rotation = false;
+  /// Start-up (no reference field accepted yet): the heading follows the field
+  /// provisionally (flag mag_no_reference). When the first reference is accepted the heading
+  /// variance is raised to at least (mag_first_ref_sigma_deg)^2 and the start-up gain
+  /// schedule (K >= 1/N for tau_mag_s) restarts, so the heading converges on accepted samples
+  /// only; the schedule counts only samples that pass the disturbance tests. 0 keeps the
+  /// provisional heading's variance.
+  double mag_first_ref_sigma_deg = 0.0;
   double mag_min_undisturbed_time_s = 0.5;
   double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
   double mag_rejection_factor = 2.0;       ///< gain divisor after that
@@ -179,10 +186,12 @@ struct FilterState {
   Eigen::Vector3d rest_last_gyr_lp = Eigen::Vector3d::Zero();
   // magnetometer
   bool mag_disturbed = true;
+  bool mag_have_ref = false;  ///< a reference field was accepted (start-up is over)
   double k_mag_init = 1.0;
   double mag_ref_norm = 0, mag_ref_dip = 0;
   double mag_undisturbed_t_s = 0, mag_reject_t_s = 0;
   double mag_cand_norm = -1, mag_cand_dip = 0, mag_cand_t_s = 0;
+  double mag_cand_age_s = 0;  ///< time the field has stayed consistent with the candidate
   filt::Lowpass<2> mag_norm_dip_lp;
   double mag_norm_dip[2] = {0, 0};
   Eigen::Vector3d mag_i_mean = Eigen::Vector3d::Zero();  ///< consistency test: mean of q_gyr m
@@ -195,6 +204,21 @@ struct FilterState {
   Eigen::Vector3d hard_iron_uT = Eigen::Vector3d::Zero();
   bool hard_iron_valid = false;
   int hi_n = 0;
+};
+
+/// Everything a consumer reads after an update, in one plain struct (AttitudeFilter::output()).
+struct FilterOutput {
+  Eigen::Quaterniond q_earth_sensor = Eigen::Quaterniond::Identity();     ///< 9D (or 6D)
+  Eigen::Quaterniond q_earth_sensor_6d = Eigen::Quaterniond::Identity();  ///< gyro + acc
+  Eigen::Vector3d gyro_bias_rad_s = Eigen::Vector3d::Zero();
+  double heading_sigma_rad = 0;
+  bool at_rest = false;
+  /// The field is currently rejected by the disturbance tests (a reference exists and the
+  /// field does not match it); the heading runs on the gyro.
+  bool mag_disturbed = false;
+  /// No reference field accepted yet (start-up): the heading follows the field
+  /// provisionally and must not be trusted; distinct from mag_disturbed.
+  bool mag_no_reference = false;
 };
 
 /// Quaternion attitude filter for one sensor. Allocation-free update.
@@ -211,7 +235,16 @@ class AttitudeFilter {
   /// 6D orientation (sensor -> a z-up frame with arbitrary but slowly drifting heading).
   Eigen::Quaterniond q_earth_sensor_6d() const;
   bool at_rest() const { return st_.rest; }
-  bool mag_disturbed() const { return st_.have_mag && st_.mag_disturbed; }
+  /// Field currently rejected (a reference field exists and this one fails its tests).
+  bool mag_disturbed() const {
+    return st_.have_mag && st_.mag_have_ref && p_.mag_dist_rejection && st_.mag_disturbed;
+  }
+  /// Magnetometer samples arrive but no reference field was accepted yet (start-up): the
+  /// 9D heading is provisional. False without a magnetometer or without disturbance tests.
+  bool mag_no_reference() const {
+    return st_.have_mag && p_.mag_dist_rejection && !st_.mag_have_ref;
+  }
+  FilterOutput output() const;
   Eigen::Vector3d gyro_bias_rad_s() const { return st_.bias_rad_s; }
   /// Estimated gyro gain error G (scale on the diagonal, misalignment off it): the gyro reads
   /// (I + G) w + bias; the filter integrates the rate corrected by it.
