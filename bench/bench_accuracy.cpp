@@ -154,12 +154,12 @@ int run_accuracy(int argc, char** argv) {
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
-      .flag("hold", "hold each disturbed sensor's heading on its gyro (heading_hold.hpp)")
-      .option("coupling", "heading coupling at knees/elbows: on|off (default off)")
+      .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
       .option("coupling-param",
               "HeadingCouplingOptions overrides, comma list of name=value "
               "(tau_s, min_flex_deg, min_axis_horizontal, "
               "max_elevation_mismatch, max_correction_deg, max_residual_deg)")
+      .flag("no-carry", "heading coupling: do not carry a child's correction to the next segment")
       .flag("no-refine", "N-pose calibration only (no hinge-motion refinement)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
@@ -187,8 +187,7 @@ int run_accuracy(int argc, char** argv) {
   else if (heading == "truth")
     base.heading = HeadingSource::explicit_heading;
   if (args.has("no-refine")) base.hinge_refine.enabled = false;
-  base.heading_hold.enabled = args.has("hold");
-  const std::string coupling = args.get_or("coupling", "off");
+  const std::string coupling = args.get_or("coupling", "on");
   if (coupling != "on" && coupling != "off") {
     std::fprintf(stderr, "mocap bench accuracy: --coupling must be on or off\n");
     return 2;
@@ -205,6 +204,7 @@ int run_accuracy(int argc, char** argv) {
                     : k == "max_elevation_mismatch" ? &c.max_elevation_mismatch
                     : k == "max_correction_deg"     ? &c.max_correction_deg
                     : k == "max_residual_deg"       ? &c.max_residual_deg
+                    : k == "disturbed_weight"       ? &c.disturbed_weight
                                                     : nullptr;
     char* end = nullptr;
     const double v = eq == std::string::npos ? 0 : std::strtod(kv.c_str() + eq + 1, &end);
@@ -214,6 +214,7 @@ int run_accuracy(int argc, char** argv) {
     }
     *field = v;
   }
+  if (args.has("no-carry")) base.heading_coupling.carry_distal = false;
   if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();

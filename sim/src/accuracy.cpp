@@ -63,7 +63,6 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       throw std::invalid_argument("accuracy: filter parameter '" + a + "': " + err);
   }
   std::vector<AttitudeFilter> filters(Performer::kSensorCount, AttitudeFilter(fp));
-  std::vector<HeadingHold> holds(Performer::kSensorCount, HeadingHold(o.heading_hold));
   CalibratorOptions copt;
   copt.capture_s = o.capture_s;
   copt.heading = o.heading;
@@ -109,8 +108,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       AttitudeFilter& f = filters[s.sensor_id];
       f.update(s);
       const int seg = index(Performer::sensor_segment(s.sensor_id));
-      const Eigen::Quaterniond q = holds[s.sensor_id].update(
-          f.q_earth_sensor(), f.q_earth_sensor_6d(), f.mag_disturbed(), s.t_host_ns);
+      const Eigen::Quaterniond q = f.q_earth_sensor();
       if (calibrator.capturing()) {
         calibrator.add_sample(seg, q, s.t_host_ns, &s.acc_m_s2);
       } else if (r.calibrated) {

@@ -70,11 +70,18 @@ void HeadingCoupling::update(const std::array<Eigen::Quaterniond, kSegmentCount>
         st.observed_s += dt_s;
       }
     }
-    // Minimum-norm split by trust: c_child - c_parent = -offset.
+    // The parent is the reference unless it is flagged disturbed and the child is not: the
+    // parent's share of the correction ramps with the trust difference (c_child - c_parent =
+    // -offset always).
     const double offset = st.offset_deg * kDegToRad;
-    const double wsum = trust_[p] + trust_[c];
-    corr_[p] = wsum > 0 ? offset * trust_[c] / wsum : 0.0;
-    corr_[c] = wsum > 0 ? -offset * trust_[p] / wsum : -offset;
+    const double span = 1.0 - opt_.disturbed_weight;
+    const double share_p = span > 0 ? std::clamp((trust_[c] - trust_[p]) / span, 0.0, 1.0) : 0.0;
+    corr_[p] = offset * share_p;
+    corr_[c] = -offset * (1.0 - share_p);
+    if (opt_.carry_distal) {
+      const int d = kCouplingCarry[c];
+      if (d >= 0) corr_[d] = corr_[c];
+    }
   }
 }
 

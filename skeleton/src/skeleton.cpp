@@ -58,6 +58,7 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
 
 void Skeleton::set_calibration(const Calibration& c) {
   calib_ = calib_base_ = c;
+  ++calib_revision_;
   refiner_.reset();
   coupling_.reset();
 }
@@ -76,6 +77,7 @@ void Skeleton::reset_heading(const double* target_heading_deg) {
   }
   calib_ =
       HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(), refiner_.common_yaw_rad());
+  ++calib_revision_;
 }
 
 void Skeleton::set_sensor_live(int segment, bool live) {
@@ -114,6 +116,7 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
     if (refiner_.update(t_now_ns)) {
       calib_ = HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(),
                                        refiner_.common_yaw_rad());
+      ++calib_revision_;
       for (int i = 0; i < kSegmentCount; ++i)
         if (live[i]) q_earth_[i] = calib_.segment_from_sensor(i, q_es_[i]);
     }

@@ -12,7 +12,6 @@
 #include "mocap/sim/sensor_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/heading_coupling.hpp"
-#include "mocap/skeleton/heading_hold.hpp"
 #include "mocap/skeleton/hinge_calibration.hpp"
 
 namespace mocap::sim {
@@ -33,12 +32,9 @@ struct AccuracyOptions {
   double explicit_heading_deg = 0;
   /// Hinge-motion refinement of the calibration (on by default, as in the daemon).
   HingeRefineOptions hinge_refine{};
-  /// While a filter flags its magnetometer disturbed, use its 6-D orientation with the last
-  /// trusted heading offset (heading_hold.hpp; opt-in).
-  HeadingHoldOptions heading_hold{};
   /// Heading coupling at the knees and elbows (heading_coupling.hpp), as the daemon's
-  /// calibration.heading_coupling.
-  HeadingCouplingOptions heading_coupling{};
+  /// calibration.heading_coupling (on by default in both).
+  HeadingCouplingOptions heading_coupling{.enabled = true};
   /// AttitudeFilter parameter overrides ("name=value", as `mocap filter --param`), e.g. to see
   /// what a filter change would gain; default: the filter's defaults, as the daemon uses.
   std::vector<std::string> filter_params;

@@ -19,12 +19,15 @@
 // The offset estimate is capped at +-max_correction_deg, so a wrong constraint (e.g. a sensor
 // moved on its segment) cannot turn a segment further; each step is limited to
 // max_residual_deg of the measured offset. Which of the two sensors drifted is not observable
-// at the hinge: the offset is removed by turning both towards each other, each by the other's
-// share of trust (minimum-norm consensus: c_parent = d w_c / (w_p + w_c), c_child =
-// -d w_p / (w_p + w_c)). A sensor whose filter flags its magnetometer disturbed has trust
-// disturbed_weight (smoothed with trust_tau_s, so corrections never jump), so the clean one
-// stays and the disturbed one is held to it; with equal trust each takes half, which also
-// halves the offset seen at the 3-DOF hip/ankle or shoulder/wrist on either side.
+// at the hinge. The parent (thigh, upper arm: the side of the pelvis/torso reference chain) is
+// the reference and the child is turned onto it; the child's correction is carried to the
+// segment beyond it (foot, hand), so the 3-DOF joints on either side (hip/shoulder, ankle/wrist)
+// keep exactly what the filters measured (while no flag is up the coupling changes no 3-DOF
+// joint). Only while the parent's filter flags its magnetometer disturbed and the child's does
+// not is the parent turned instead (its share ramps with the trust difference; trust drops to
+// disturbed_weight while flagged, smoothed with trust_tau_s, so corrections never jump). A filter's
+// heading ahead of its first reference field is flagged separately (no_reference) and not treated
+// as disturbed.
 //
 // Pure, deterministic, allocation-free; one instance per skeleton, reset with the calibration.
 #pragma once
@@ -44,11 +47,14 @@ struct HeadingCouplingOptions {
   double min_flex_deg = 20;             ///< joint rotation below this: not observable
   double min_axis_horizontal = 0.5;     ///< |horizontal part| of both unit axes at least this
   double max_elevation_mismatch = 0.1;  ///< |a_parent.z - a_child.z| at most this
-  double max_correction_deg = 15;       ///< cap of each correction
+  double max_correction_deg = 25;       ///< cap of each correction
   double max_residual_deg = 20;         ///< a measured offset is clamped to this per step
   double max_step_s = 0.1;              ///< longer gaps between updates count as this
   double disturbed_weight = 0.05;       ///< trust of a sensor flagged disturbed (clean: 1)
   double trust_tau_s = 1.0;             ///< time constant of the trust after a flag change
+  /// The child's correction also turns the segment beyond it (foot, hand), so the 3-DOF ankle
+  /// and wrist keep what the filters measured.
+  bool carry_distal = true;
 };
 
 /// One hinge's state (diagnostics, tests).
@@ -68,6 +74,10 @@ inline constexpr std::array<CouplingPair, 4> kCouplingPairs = {{
     {Segment::upper_arm_l, Segment::forearm_l},
     {Segment::upper_arm_r, Segment::forearm_r},
 }};
+
+/// The segment beyond each coupled child (shank -> foot, forearm -> hand), else -1.
+inline constexpr std::array<int8_t, kSegmentCount> kCouplingCarry = {
+    -1, -1, -1, -1, -1, 6, -1, -1, 9, -1, -1, 12, -1, -1, 15, -1};
 
 class HeadingCoupling {
  public:

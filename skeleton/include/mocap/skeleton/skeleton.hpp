@@ -58,6 +58,9 @@ class Skeleton {
   void set_calibration(const Calibration& c);
   /// The calibration in use: the one set, refined by hinge motion when enabled (save this one).
   const Calibration& calibration() const { return calib_; }
+  /// Counts every change of calibration() (set, heading reset, refinement): a caller that saves
+  /// the calibration compares it with the value at its last save.
+  uint64_t calibration_revision() const { return calib_revision_; }
   void clear_calibration() { set_calibration(Calibration{}); }
   /// The hinge refinement's state (yaw offsets found so far, per-hinge estimates).
   const HingeAxisRefiner& hinge_refiner() const { return refiner_; }
@@ -107,6 +110,7 @@ class Skeleton {
   SkeletonOptions opt_;
   Calibration calib_;       ///< in use: calib_base_ refined by the hinge yaw offsets
   Calibration calib_base_;  ///< as set (plus heading resets)
+  uint64_t calib_revision_ = 0;
   HingeAxisRefiner refiner_;
   HeadingCoupling coupling_;
   RootMotion root_;
