@@ -66,7 +66,21 @@ void AttitudeFilter::refresh_coeffs() {
   c_.heading_q_rad2_s = sh2 / std::max(p_.tau_mag_s, 1e-9);
   c_.heading_r0_rad2 = sh2 * p_.tau_mag_s / c_.mag_ts_s;
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
-  c_.k_hard_iron = p_.hard_iron_tau_s > 0 ? std::exp(-c_.mag_ts_s / p_.hard_iron_tau_s) : 0.0;
+  // Hard-iron estimator: fixed period in seconds; variances relative to the field norm.
+  c_.hard_iron_decim =
+      std::max(1, static_cast<int>(std::lround(p_.hard_iron_step_s / c_.mag_ts_s)));
+  c_.hard_iron.p0_offset_rel2 = sq(p_.hard_iron_sigma0);
+  c_.hard_iron.q_offset_rel2_s = c_.hard_iron.p0_offset_rel2 / std::max(p_.hard_iron_tau_s, 1e-9);
+  c_.hard_iron.q_field_rel2_s = sq(p_.hard_iron_field_rw_deg * kDeg);
+  c_.hard_iron.r_rel2 = sq(p_.hard_iron_noise);
+  c_.hard_iron.gate_rel2 = sq(p_.hard_iron_gate);
+  c_.hard_iron.min_offset_rel = p_.hard_iron_min_offset;
+  c_.hard_iron.min_sigmas = p_.hard_iron_min_sigmas;
+  c_.hard_iron.k_nis =
+      filt::gain_from_tau(p_.hard_iron_nis_tau_s, c_.hard_iron_decim * c_.mag_ts_s);
+  c_.hard_iron.nis_max = p_.hard_iron_nis_max;
+  c_.k_hard_iron_select =
+      filt::gain_from_tau(p_.hard_iron_select_tau_s, c_.hard_iron_decim * c_.mag_ts_s);
   c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
   c_.k_latency = filt::gain_from_tau(p_.mag_latency_tau_s, c_.mag_ts_s);
   c_.k_latency_hp = filt::gain_from_tau(p_.mag_latency_hp_tau_s, c_.mag_ts_s);
@@ -360,44 +374,56 @@ Eigen::Matrix3d AttitudeFilter::gyro_gain() const {
   return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(st_.gain.data());
 }
 
-// Exponentially weighted least squares for (c, h) in R m = c + R h, R = rotation of q_gyr.
-// With W = sum w, S = sum w R, u = sum w R m, v = sum w m the normal equations reduce to
-// (W^2 I - S^T S) h = W v - S^T u.
-void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag) {
-  const double f = c_.k_hard_iron;
-  const Eigen::Matrix3d r = st_.q_gyr.toRotationMatrix();
-  st_.hi_w = f * st_.hi_w + 1.0;
-  st_.hi_s = f * st_.hi_s + r;
-  st_.hi_u = f * st_.hi_u + r * mag;
-  st_.hi_v = f * st_.hi_v + mag;
-  st_.hi_e = f * st_.hi_e + mag.squaredNorm();
-  if (++st_.hi_n < 16) return;  // solve at about 1/16 of the magnetometer rate
-  st_.hi_n = 0;
-  const double w = st_.hi_w;
-  const Eigen::Matrix3d m = w * w * Eigen::Matrix3d::Identity() - st_.hi_s.transpose() * st_.hi_s;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
-  es.computeDirect(m, Eigen::EigenvaluesOnly);
-  const double excitation = es.eigenvalues()(0) / (w * w);
-  if (!(excitation > p_.hard_iron_min_excitation)) return;  // keep the last estimate
-  const Eigen::Vector3d h = m.ldlt().solve(w * st_.hi_v - st_.hi_s.transpose() * st_.hi_u);
-  const Eigen::Vector3d c = (st_.hi_u - st_.hi_s * h) / w;
-  const double res = st_.hi_e + w * c.squaredNorm() + w * h.squaredNorm() - 2 * c.dot(st_.hi_u) -
-                     2 * h.dot(st_.hi_v) + 2 * c.dot(st_.hi_s * h);
-  const double rms_rel = std::sqrt(std::max(res, 0.0) / w) / std::max(c.norm(), 1e-9);
-  if (h.allFinite() && rms_rel < p_.hard_iron_max_residual) {
-    st_.hard_iron_uT = h;
-    st_.hard_iron_valid = true;
+// Applies the gated offset only while it explains a disturbance: the squared norm/dip
+// deviations from the reference (relative to the thresholds) without and with it.
+void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
+                                      const Eigen::Vector3d& m_corr_e) {
+  if (p_.hard_iron_select_margin <= 0) {
+    st_.hi_weight = 1;
+    return;
   }
+  if (st_.mag_ref_norm <= 0 || st_.hard_iron.used_uT.isZero()) {
+    // Nothing to compare with before a reference field exists (a field that varies around
+    // a magnet at start-up must not be "explained" by an offset), or nothing to apply.
+    st_.hi_select = 0;
+    st_.hi_weight = 0;
+    return;
+  }
+  auto score = [&](const Eigen::Vector3d& m) {
+    const double n = m.norm();
+    if (!(n > 0)) return 0.0;
+    const double dip = -std::asin(std::clamp(m.z() / n, -1.0, 1.0));
+    const double dn = (n - st_.mag_ref_norm) / (p_.mag_norm_th * st_.mag_ref_norm);
+    const double dd = (dip - st_.mag_ref_dip) / (p_.mag_dip_th_deg * kDeg);
+    return std::min(dn * dn + dd * dd, 25.0);
+  };
+  st_.hi_select += c_.k_hard_iron_select * (score(m_raw_e) - score(m_corr_e) - st_.hi_select);
+  st_.hi_weight = std::clamp(st_.hi_select / p_.hard_iron_select_margin, 0.0, 1.0);
 }
 
 void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const double ts = c_.mag_ts_s;
-  if (p_.hard_iron_tau_s > 0) update_hard_iron(mag_raw);
-  const Eigen::Vector3d mag =
-      st_.hard_iron_valid ? Eigen::Vector3d(mag_raw - st_.hard_iron_uT) : mag_raw;
+  const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
+  if (p_.hard_iron_tau_s > 0) {
+    // Hard-iron estimator (decimated), fed with the latency-compensated raw field.
+    st_.hi_dt_s += dt_s > 0 ? dt_s : ts;
+    if (++st_.hi_n >= c_.hard_iron_decim) {
+      const double lat_s = p_.mag_latency_tau_s > 0
+                               ? st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kDeg,
+                                                           p_.mag_latency_max_s)
+                               : 0.0;
+      const Eigen::Vector3d w = st_.last_gyr_rad_s - st_.bias_rad_s;
+      const Eigen::Vector3d m_c = mag_raw - lat_s * w.cross(mag_raw - st_.hard_iron.used_uT);
+      const Eigen::Matrix3d r6 = q6.toRotationMatrix();
+      st_.hard_iron.step(m_c, r6, std::min(st_.hi_dt_s, 1.0), st_.mag_ref_norm, c_.hard_iron);
+      st_.hi_n = 0;
+      st_.hi_dt_s = 0;
+      select_hard_iron(r6 * m_c, r6 * (m_c - st_.hard_iron.used_uT));
+    }
+  }
+  const Eigen::Vector3d mag = mag_raw - hard_iron_uT();
   // Into the 6D earth frame, compensated for the latency behind the gyro: a field read L
   // late is the current one rotated by w L, so v = q6 (w x m) is its rate of change there.
-  const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
   Eigen::Vector3d m_e = q6 * mag;
   if (p_.mag_latency_tau_s > 0) {
     const Eigen::Vector3d v_e = q6 * (st_.last_gyr_rad_s - st_.bias_rad_s).cross(mag);
@@ -493,6 +519,13 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       score += st_.mag_i_var_rel / (p_.mag_consistency_th * p_.mag_consistency_th);
     // A field that was rejected recently is trusted less until the rejection budget is repaid.
     score += st_.mag_reject_t_s / p_.tau_mag_s;
+    if (st_.hi_weight > 0 && st_.hard_iron.used_sigma_uT > 0) {
+      // A corrected field is only as good as the offset: its sigma as a heading angle.
+      const double sh = st_.hi_weight * st_.hard_iron.used_sigma_uT /
+                        std::max(m_e.head<2>().norm(), 1e-3 * st_.mag_ref_norm + 1e-9);
+      const double rel = sh / (p_.heading_sigma_deg * kDeg);
+      score += p_.hard_iron_trust_weight * rel * rel;
+    }
     r *= 1.0 + score;
   }
   double k = st_.delta_var_rad2 / (st_.delta_var_rad2 + r);
@@ -535,6 +568,8 @@ FilterOutput AttitudeFilter::output() const {
   o.at_rest = st_.rest;
   o.mag_disturbed = mag_disturbed();
   o.mag_no_reference = mag_no_reference();
+  o.hard_iron_uT = hard_iron_uT();
+  o.hard_iron_sigma_uT = hard_iron_sigma_uT();
   return o;
 }
 
