@@ -398,6 +398,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     k.num("capture_s", c.calibration.capture_s, 0.05, 10);
     k.str("file", c.calibration.file);
     k.boolean("refine_hinges", c.calibration.refine_hinges);
+    k.boolean("heading_coupling", c.calibration.heading_coupling);
     k.finish();
   }
   if (const toml::table* outs = r.table("outputs")) {
@@ -641,7 +642,8 @@ std::string config_to_toml(const Config& c) {
                                          {"countdown_s", c.calibration.countdown_s},
                                          {"capture_s", c.calibration.capture_s},
                                          {"file", c.calibration.file},
-                                         {"refine_hinges", c.calibration.refine_hinges}});
+                                         {"refine_hinges", c.calibration.refine_hinges},
+                                         {"heading_coupling", c.calibration.heading_coupling}});
   toml::table outs;
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
                                   {"bind", c.outputs.json.bind},

@@ -66,7 +66,21 @@ void AttitudeFilter::refresh_coeffs() {
   c_.heading_q_rad2_s = sh2 / std::max(p_.tau_mag_s, 1e-9);
   c_.heading_r0_rad2 = sh2 * p_.tau_mag_s / c_.mag_ts_s;
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
-  c_.k_hard_iron = p_.hard_iron_tau_s > 0 ? std::exp(-c_.mag_ts_s / p_.hard_iron_tau_s) : 0.0;
+  // Hard-iron estimator: fixed period in seconds; variances relative to the field norm.
+  c_.hard_iron_decim =
+      std::max(1, static_cast<int>(std::lround(p_.hard_iron_step_s / c_.mag_ts_s)));
+  c_.hard_iron.p0_offset_rel2 = sq(p_.hard_iron_sigma0);
+  c_.hard_iron.q_offset_rel2_s = c_.hard_iron.p0_offset_rel2 / std::max(p_.hard_iron_tau_s, 1e-9);
+  c_.hard_iron.q_field_rel2_s = sq(p_.hard_iron_field_rw_deg * kDeg);
+  c_.hard_iron.r_rel2 = sq(p_.hard_iron_noise);
+  c_.hard_iron.gate_rel2 = sq(p_.hard_iron_gate);
+  c_.hard_iron.min_offset_rel = p_.hard_iron_min_offset;
+  c_.hard_iron.min_sigmas = p_.hard_iron_min_sigmas;
+  c_.hard_iron.k_nis =
+      filt::gain_from_tau(p_.hard_iron_nis_tau_s, c_.hard_iron_decim * c_.mag_ts_s);
+  c_.hard_iron.nis_max = p_.hard_iron_nis_max;
+  c_.k_hard_iron_select =
+      filt::gain_from_tau(p_.hard_iron_select_tau_s, c_.hard_iron_decim * c_.mag_ts_s);
   c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
   c_.k_latency = filt::gain_from_tau(p_.mag_latency_tau_s, c_.mag_ts_s);
   c_.k_latency_hp = filt::gain_from_tau(p_.mag_latency_hp_tau_s, c_.mag_ts_s);
@@ -360,44 +374,56 @@ Eigen::Matrix3d AttitudeFilter::gyro_gain() const {
   return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(st_.gain.data());
 }
 
-// Exponentially weighted least squares for (c, h) in R m = c + R h, R = rotation of q_gyr.
-// With W = sum w, S = sum w R, u = sum w R m, v = sum w m the normal equations reduce to
-// (W^2 I - S^T S) h = W v - S^T u.
-void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag) {
-  const double f = c_.k_hard_iron;
-  const Eigen::Matrix3d r = st_.q_gyr.toRotationMatrix();
-  st_.hi_w = f * st_.hi_w + 1.0;
-  st_.hi_s = f * st_.hi_s + r;
-  st_.hi_u = f * st_.hi_u + r * mag;
-  st_.hi_v = f * st_.hi_v + mag;
-  st_.hi_e = f * st_.hi_e + mag.squaredNorm();
-  if (++st_.hi_n < 16) return;  // solve at about 1/16 of the magnetometer rate
-  st_.hi_n = 0;
-  const double w = st_.hi_w;
-  const Eigen::Matrix3d m = w * w * Eigen::Matrix3d::Identity() - st_.hi_s.transpose() * st_.hi_s;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
-  es.computeDirect(m, Eigen::EigenvaluesOnly);
-  const double excitation = es.eigenvalues()(0) / (w * w);
-  if (!(excitation > p_.hard_iron_min_excitation)) return;  // keep the last estimate
-  const Eigen::Vector3d h = m.ldlt().solve(w * st_.hi_v - st_.hi_s.transpose() * st_.hi_u);
-  const Eigen::Vector3d c = (st_.hi_u - st_.hi_s * h) / w;
-  const double res = st_.hi_e + w * c.squaredNorm() + w * h.squaredNorm() - 2 * c.dot(st_.hi_u) -
-                     2 * h.dot(st_.hi_v) + 2 * c.dot(st_.hi_s * h);
-  const double rms_rel = std::sqrt(std::max(res, 0.0) / w) / std::max(c.norm(), 1e-9);
-  if (h.allFinite() && rms_rel < p_.hard_iron_max_residual) {
-    st_.hard_iron_uT = h;
-    st_.hard_iron_valid = true;
+// Applies the gated offset only while it explains a disturbance: the squared norm/dip
+// deviations from the reference (relative to the thresholds) without and with it.
+void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
+                                      const Eigen::Vector3d& m_corr_e) {
+  if (p_.hard_iron_select_margin <= 0) {
+    st_.hi_weight = 1;
+    return;
   }
+  if (st_.mag_ref_norm <= 0 || st_.hard_iron.used_uT.isZero()) {
+    // Nothing to compare with before a reference field exists (a field that varies around
+    // a magnet at start-up must not be "explained" by an offset), or nothing to apply.
+    st_.hi_select = 0;
+    st_.hi_weight = 0;
+    return;
+  }
+  auto score = [&](const Eigen::Vector3d& m) {
+    const double n = m.norm();
+    if (!(n > 0)) return 0.0;
+    const double dip = -std::asin(std::clamp(m.z() / n, -1.0, 1.0));
+    const double dn = (n - st_.mag_ref_norm) / (p_.mag_norm_th * st_.mag_ref_norm);
+    const double dd = (dip - st_.mag_ref_dip) / (p_.mag_dip_th_deg * kDeg);
+    return std::min(dn * dn + dd * dd, 25.0);
+  };
+  st_.hi_select += c_.k_hard_iron_select * (score(m_raw_e) - score(m_corr_e) - st_.hi_select);
+  st_.hi_weight = std::clamp(st_.hi_select / p_.hard_iron_select_margin, 0.0, 1.0);
 }
 
 void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const double ts = c_.mag_ts_s;
-  if (p_.hard_iron_tau_s > 0) update_hard_iron(mag_raw);
-  const Eigen::Vector3d mag =
-      st_.hard_iron_valid ? Eigen::Vector3d(mag_raw - st_.hard_iron_uT) : mag_raw;
+  const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
+  if (p_.hard_iron_tau_s > 0) {
+    // Hard-iron estimator (decimated), fed with the latency-compensated raw field.
+    st_.hi_dt_s += dt_s > 0 ? dt_s : ts;
+    if (++st_.hi_n >= c_.hard_iron_decim) {
+      const double lat_s = p_.mag_latency_tau_s > 0
+                               ? st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kDeg,
+                                                           p_.mag_latency_max_s)
+                               : 0.0;
+      const Eigen::Vector3d w = st_.last_gyr_rad_s - st_.bias_rad_s;
+      const Eigen::Vector3d m_c = mag_raw - lat_s * w.cross(mag_raw - st_.hard_iron.used_uT);
+      const Eigen::Matrix3d r6 = q6.toRotationMatrix();
+      st_.hard_iron.step(m_c, r6, std::min(st_.hi_dt_s, 1.0), st_.mag_ref_norm, c_.hard_iron);
+      st_.hi_n = 0;
+      st_.hi_dt_s = 0;
+      select_hard_iron(r6 * m_c, r6 * (m_c - st_.hard_iron.used_uT));
+    }
+  }
+  const Eigen::Vector3d mag = mag_raw - hard_iron_uT();
   // Into the 6D earth frame, compensated for the latency behind the gyro: a field read L
   // late is the current one rotated by w L, so v = q6 (w x m) is its rate of change there.
-  const Eigen::Quaterniond q6 = st_.q_acc * st_.q_gyr;
   Eigen::Vector3d m_e = q6 * mag;
   if (p_.mag_latency_tau_s > 0) {
     const Eigen::Vector3d v_e = q6 * (st_.last_gyr_rad_s - st_.bias_rad_s).cross(mag);
@@ -434,11 +460,21 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       if ((st_.mag_ref_norm == 0 && !p_.mag_first_needs_rotation) ||
           st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kDeg)
         st_.mag_cand_t_s += ts;
+      st_.mag_cand_age_s += ts;
       st_.mag_cand_norm += c_.k_mag_ref * (norm - st_.mag_cand_norm);
       st_.mag_cand_dip += c_.k_mag_ref * (dip - st_.mag_cand_dip);
       if (st_.mag_disturbed &&
           (st_.mag_cand_t_s >= p_.mag_new_time_s ||
            (st_.mag_ref_norm == 0 && st_.mag_cand_t_s >= p_.mag_new_first_time_s))) {
+        if (!st_.mag_have_ref) {
+          // End of start-up: converge afresh on samples that pass the tests from now on.
+          // The schedule restarts at the gain the heading variance implies (1 after a full
+          // reset, about the Kalman gain when the provisional heading is kept).
+          st_.mag_have_ref = true;
+          const double s0 = p_.mag_first_ref_sigma_deg * kDeg;
+          st_.delta_var_rad2 = std::max(st_.delta_var_rad2, s0 * s0);
+          st_.k_mag_init = st_.delta_var_rad2 / (st_.delta_var_rad2 + c_.heading_r0_rad2);
+        }
         st_.mag_ref_norm = st_.mag_cand_norm;
         st_.mag_ref_dip = st_.mag_cand_dip;
         st_.mag_disturbed = false;
@@ -446,6 +482,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       }
     } else {
       st_.mag_cand_t_s = 0;
+      st_.mag_cand_age_s = 0;
       st_.mag_cand_norm = norm;
       st_.mag_cand_dip = dip;
     }
@@ -470,20 +507,37 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
   st_.delta_var_rad2 += (c_.heading_q_rad2_s + sb2) * (dt_s > 0 ? dt_s : ts);  // real gap
   double r = c_.heading_r0_rad2;
-  if (p_.mag_dist_rejection && st_.mag_ref_norm > 0) {
-    const double dn =
-        (st_.mag_norm_dip[0] - st_.mag_ref_norm) / (p_.mag_norm_th * st_.mag_ref_norm);
-    const double dd = (st_.mag_norm_dip[1] - st_.mag_ref_dip) / (p_.mag_dip_th_deg * kDeg);
+  if (p_.mag_dist_rejection && (st_.mag_ref_norm > 0 || st_.mag_cand_norm > 0)) {
+    // Deviations from the reference, or before one exists from the candidate.
+    const bool ref = st_.mag_ref_norm > 0;
+    const double rn = ref ? st_.mag_ref_norm : st_.mag_cand_norm;
+    const double rd = ref ? st_.mag_ref_dip : st_.mag_cand_dip;
+    const double dn = (st_.mag_norm_dip[0] - rn) / (p_.mag_norm_th * rn);
+    const double dd = (st_.mag_norm_dip[1] - rd) / (p_.mag_dip_th_deg * kDeg);
     double score = p_.mag_trust_weight * (dn * dn + dd * dd);
     if (p_.mag_consistency_th > 0)
       score += st_.mag_i_var_rel / (p_.mag_consistency_th * p_.mag_consistency_th);
     // A field that was rejected recently is trusted less until the rejection budget is repaid.
     score += st_.mag_reject_t_s / p_.tau_mag_s;
+    if (st_.hi_weight > 0 && st_.hard_iron.used_sigma_uT > 0) {
+      // A corrected field is only as good as the offset: its sigma as a heading angle.
+      const double sh = st_.hi_weight * st_.hard_iron.used_sigma_uT /
+                        std::max(m_e.head<2>().norm(), 1e-3 * st_.mag_ref_norm + 1e-9);
+      const double rel = sh / (p_.heading_sigma_deg * kDeg);
+      score += p_.hard_iron_trust_weight * rel * rel;
+    }
     r *= 1.0 + score;
   }
   double k = st_.delta_var_rad2 / (st_.delta_var_rad2 + r);
+  bool use_init = true;  // the start-up schedule counts only samples that pass the tests
   if (p_.mag_dist_rejection) {
-    if (st_.mag_disturbed) {
+    if (!st_.mag_have_ref) {
+      // Provisional heading: follows the field only while it stays consistent with the
+      // candidate reference (a field whose norm or dip changes is no earth field).
+      use_init = false;
+      if (st_.mag_cand_age_s < p_.mag_min_undisturbed_time_s) k = 0;
+    } else if (st_.mag_disturbed) {
+      use_init = false;
       if (st_.mag_reject_t_s <= p_.mag_max_rejection_time_s) {
         st_.mag_reject_t_s += ts;
         k = 0;
@@ -494,7 +548,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       st_.mag_reject_t_s = std::max(st_.mag_reject_t_s - p_.mag_rejection_factor * ts, 0.0);
     }
   }
-  if (st_.k_mag_init != 0) {
+  if (st_.k_mag_init != 0 && use_init) {
     k = std::max(k, st_.k_mag_init);
     st_.k_mag_init = st_.k_mag_init / (st_.k_mag_init + 1);
     if (st_.k_mag_init * p_.tau_mag_s < ts) st_.k_mag_init = 0;
@@ -503,6 +557,20 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   // Joseph form: valid for the gains the rejection and start-up rules impose as well.
   st_.delta_var_rad2 = (1 - k) * (1 - k) * st_.delta_var_rad2 + k * k * r;
   st_.q_delta = heading_quat(st_.delta_rad);
+}
+
+FilterOutput AttitudeFilter::output() const {
+  FilterOutput o;
+  o.q_earth_sensor = q_earth_sensor();
+  o.q_earth_sensor_6d = q_earth_sensor_6d();
+  o.gyro_bias_rad_s = st_.bias_rad_s;
+  o.heading_sigma_rad = heading_sigma_rad();
+  o.at_rest = st_.rest;
+  o.mag_disturbed = mag_disturbed();
+  o.mag_no_reference = mag_no_reference();
+  o.hard_iron_uT = hard_iron_uT();
+  o.hard_iron_sigma_uT = hard_iron_sigma_uT();
+  return o;
 }
 
 Eigen::Quaterniond AttitudeFilter::q_earth_sensor_6d() const {

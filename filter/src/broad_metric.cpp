@@ -40,4 +40,19 @@ AttitudeErrors score_trial(const BroadTrial& trial, const std::vector<Eigen::Qua
   return r;
 }
 
+namespace {
+constexpr VqfRef kVqf[] = {
+    {"01_", 1.99, 1.89, 0.60}, {"04_", 1.07, 0.73, 0.79}, {"06_", 4.03, 3.95, 0.80},
+    {"08_", 3.34, 2.84, 1.76}, {"10_", 1.80, 1.78, 0.30}, {"15_", 2.31, 2.26, 0.47},
+    {"21_", 4.08, 3.70, 1.72}, {"24_", 1.55, 1.42, 0.61}, {"26_", 1.75, 1.66, 0.56},
+    {"28_", 4.04, 3.86, 1.21}, {"30_", 2.57, 2.25, 1.25}, {"32_", 7.67, 7.65, 0.56},
+    {"34_", 3.35, 3.29, 0.65}, {"36_", 2.39, 2.22, 0.88}};
+}  // namespace
+
+const VqfRef* vqf_reference(const std::string& trial_name) {
+  for (const auto& v : kVqf)
+    if (trial_name.rfind(v.prefix, 0) == 0) return &v;
+  return nullptr;
+}
+
 }  // namespace mocap

@@ -250,37 +250,3 @@ TEST(AttitudeSynthetic, SixDimensionalOutputBeforeMagnetometer) {
 
 }  // namespace
 }  // namespace mocap::test
-
-namespace mocap::test {
-namespace {
-
-// Optional hard-iron estimation (off by default): a magnet fixed to the housing adds a
-// constant sensor-frame offset; with rotation about several axes the estimate converges.
-TEST(AttitudeSynthetic, HardIronEstimateConvergesWhenEnabled) {
-  SynthConfig c;
-  c.q0 = some_attitude();
-  c.duration_s = 90;
-  c.gyr_true = [](double t) -> Eigen::Vector3d {
-    return Eigen::Vector3d(0.8 * std::sin(0.5 * t), 0.7 * std::cos(0.3 * t),
-                           0.6 * std::sin(0.2 * t));
-  };
-  auto s = make_stream(c);
-  const Eigen::Vector3d h(10, -5, 8);
-  for (auto& smp : s.samples)
-    smp.mag_uT += h;
-  FilterParams p;
-  p.hard_iron_tau_s = 30;
-  AttitudeFilter f(p);
-  double max_err_late = 0;
-  for (size_t i = 0; i < s.samples.size(); ++i) {
-    f.update(s.samples[i]);
-    if (s.samples[i].t_host_ns > 70'000'000'000)
-      max_err_late = std::max(max_err_late, angle_deg(f.q_earth_sensor(), s.truth[i]));
-  }
-  EXPECT_TRUE(f.state().hard_iron_valid);
-  EXPECT_LT((f.state().hard_iron_uT - h).norm(), 1.0);
-  EXPECT_LT(max_err_late, 3.0);
-}
-
-}  // namespace
-}  // namespace mocap::test

@@ -52,6 +52,9 @@ struct CalibrationConfig {
   /// Refine the calibration from knee/elbow motion after it (skeleton/hinge_calibration.hpp):
   /// each segment's mounting yaw and the body heading. Off: the still pose alone.
   bool refine_hinges = true;
+  /// Kinematic heading coupling at the knees and elbows (skeleton/heading_coupling.hpp): keeps
+  /// each hinge's two sensors on one heading while their filters' headings drift apart.
+  bool heading_coupling = true;
   /// Body forward (+x) in the pelvis sensor's frame: the heading axis of a calibration. Not a
   /// file key: the default suits a pelvis sensor worn with +x forward; the demo sets its
   /// performer's belt-clip axis.

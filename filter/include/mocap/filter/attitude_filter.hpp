@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "mocap/core/imu_sample.hpp"
+#include "mocap/filter/hard_iron_estimator.hpp"
 #include "mocap/filter/latency_estimator.hpp"
 #include "mocap/filter/lowpass.hpp"
 
@@ -64,6 +65,13 @@ struct FilterParams {
   /// VQF accepts even the first field only while rotating; ours accepts the first field at
   /// rest too (start-up stand-still = clean reference, full rejection budget for the session).
   bool mag_first_needs_rotation = false;
+  /// Start-up (no reference field accepted yet): the heading follows the field
+  /// provisionally (flag mag_no_reference). When the first reference is accepted the heading
+  /// variance is raised to at least (mag_first_ref_sigma_deg)^2 and the start-up gain
+  /// schedule (K >= 1/N for tau_mag_s) restarts, so the heading converges on accepted samples
+  /// only; the schedule counts only samples that pass the disturbance tests. 0 keeps the
+  /// provisional heading's variance.
+  double mag_first_ref_sigma_deg = 0.0;
   double mag_min_undisturbed_time_s = 0.5;
   double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
   double mag_rejection_factor = 2.0;       ///< gain divisor after that
@@ -80,15 +88,34 @@ struct FilterParams {
   /// cost more accuracy (fast rotation needs magnetometer updates) than it saved.
   double mag_consistency_th = 0.0;
   double mag_consistency_tau_s = 1.0;  ///< averaging window of that test
-  /// Online hard-iron estimation (a sensor-fixed field offset h, e.g. a magnet on the housing):
-  /// in the almost-inertial frame q_gyr (m - h) is constant, which is linear in (field, h);
-  /// solved by exponentially weighted least squares over hard_iron_tau_s. h is used only when
-  /// the rotation excitation (smallest eigenvalue of the normalised information matrix) exceeds
-  /// hard_iron_min_excitation and the fit residual is below hard_iron_max_residual x |field|.
-  /// hard_iron_tau_s = 0 disables.
-  double hard_iron_tau_s = 0.0;  // off: on BROAD it fitted room-field gradients as h
-  double hard_iron_min_excitation = 0.3;
-  double hard_iron_max_residual = 0.03;
+  /// Online hard-iron offset b (a magnet or magnetised part fixed to the sensor), from the
+  /// gyro-predicted rotation of the field (filt::HardIronEstimator, Kalman filter of the
+  /// field in the 6D frame and b). hard_iron_tau_s: without rotation b's uncertainty grows
+  /// back to its prior over this time (0 disables the estimator). Noises and gates are
+  /// fractions of the field norm F. b is subtracted before the disturbance tests and the
+  /// heading, only along directions whose one-sigma is below hard_iron_gate x F, shrunk by
+  /// hard_iron_min_offset x F.
+  double hard_iron_tau_s = 1000.0;
+  double hard_iron_sigma0 = 1.0;        ///< prior one-sigma of b, x F
+  double hard_iron_field_rw_deg = 0.3;  ///< drift of the field in the 6D frame, deg/sqrt(s)
+  double hard_iron_noise = 0.03;        ///< measurement one-sigma (noise + model), x F
+  double hard_iron_gate = 0.03;         ///< b directions with one-sigma below this x F used
+  double hard_iron_min_offset = 0.02;   ///< smallest offset applied, x F
+  double hard_iron_min_sigmas = 3.0;    ///< smallest significance applied, sigmas
+  double hard_iron_nis_tau_s = 2.0;     ///< averaging of the innovation consistency
+  double hard_iron_nis_max = 9.0;       ///< above: model broken, b uncertain again
+  double hard_iron_step_s = 0.04;       ///< estimator period (decimated)
+  /// The offset is applied only while it explains a disturbance: the field's norm/dip
+  /// deviation from the reference (squared, relative to the thresholds, as the soft trust)
+  /// is compared with and without it, the difference low-passed over hard_iron_select_tau_s;
+  /// the offset's weight ramps from 0 to 1 as that difference goes from 0 to
+  /// hard_iron_select_margin. 0 = always applied once gated.
+  double hard_iron_select_tau_s = 1.0;
+  double hard_iron_select_margin = 0.2;
+  /// While an offset is applied its remaining uncertainty (one-sigma over the horizontal
+  /// field, as a heading angle) relative to heading_sigma_deg, squared and times this weight,
+  /// adds to the heading's soft-trust score: the heading follows a corrected field more slowly.
+  double hard_iron_trust_weight = 0.0;  // off: slower heading costs more (gyro drift) on BROAD
   // --- magnetometer latency (ours) ---
   /// A magnetometer often samples the motion later than the gyro (longer integration,
   /// internal filters): during fast rotation its heading then lags. The latency is
@@ -122,7 +149,9 @@ struct FilterCoeffs {
   double gyr_ts_s = 0, acc_ts_s = 0, mag_ts_s = 0;
   filt::LowpassCoeffs acc_lp, acc_fast_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
   double k_acc_dyn = 0;
-  double k_hard_iron = 0;
+  filt::HardIronCoeffs hard_iron;
+  double k_hard_iron_select = 0;
+  int hard_iron_decim = 1;  ///< estimator runs every hard_iron_decim magnetometer samples
   double k_mag = 0, k_mag_ref = 0, k_mag_consistency = 0;
   double k_latency = 0, k_latency_hp = 0;
   int bias_decim = 1;           ///< bias KF runs every bias_decim acc samples (about 100 Hz)
@@ -179,22 +208,40 @@ struct FilterState {
   Eigen::Vector3d rest_last_gyr_lp = Eigen::Vector3d::Zero();
   // magnetometer
   bool mag_disturbed = true;
+  bool mag_have_ref = false;  ///< a reference field was accepted (start-up is over)
   double k_mag_init = 1.0;
   double mag_ref_norm = 0, mag_ref_dip = 0;
   double mag_undisturbed_t_s = 0, mag_reject_t_s = 0;
   double mag_cand_norm = -1, mag_cand_dip = 0, mag_cand_t_s = 0;
+  double mag_cand_age_s = 0;  ///< time the field has stayed consistent with the candidate
   filt::Lowpass<2> mag_norm_dip_lp;
   double mag_norm_dip[2] = {0, 0};
   Eigen::Vector3d mag_i_mean = Eigen::Vector3d::Zero();  ///< consistency test: mean of q_gyr m
   double mag_i_var_rel = 0;                              ///< and relative deviation power
   bool mag_i_init = false;
-  // hard-iron least squares: weight, sum R, sum R m, sum m, sum |m|^2; current estimate
-  double hi_w = 0, hi_e = 0;
-  Eigen::Matrix3d hi_s = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d hi_u = Eigen::Vector3d::Zero(), hi_v = Eigen::Vector3d::Zero();
-  Eigen::Vector3d hard_iron_uT = Eigen::Vector3d::Zero();
-  bool hard_iron_valid = false;
-  int hi_n = 0;
+  // hard-iron offset
+  filt::HardIronEstimator hard_iron;
+  int hi_n = 0;          ///< magnetometer samples since the last estimator step
+  double hi_dt_s = 0;    ///< and their time
+  double hi_select = 0;  ///< low-passed score difference without / with the offset
+  double hi_weight = 0;  ///< weight of the offset applied (0..1)
+};
+
+/// Everything a consumer reads after an update, in one plain struct (AttitudeFilter::output()).
+struct FilterOutput {
+  Eigen::Quaterniond q_earth_sensor = Eigen::Quaterniond::Identity();     ///< 9D (or 6D)
+  Eigen::Quaterniond q_earth_sensor_6d = Eigen::Quaterniond::Identity();  ///< gyro + acc
+  Eigen::Vector3d gyro_bias_rad_s = Eigen::Vector3d::Zero();
+  double heading_sigma_rad = 0;
+  bool at_rest = false;
+  /// The field is currently rejected by the disturbance tests (a reference exists and the
+  /// field does not match it); the heading runs on the gyro.
+  bool mag_disturbed = false;
+  /// No reference field accepted yet (start-up): the heading follows the field
+  /// provisionally and must not be trusted; distinct from mag_disturbed.
+  bool mag_no_reference = false;
+  Eigen::Vector3d hard_iron_uT = Eigen::Vector3d::Zero();  ///< offset subtracted (sensor frame)
+  double hard_iron_sigma_uT = 0;  ///< its largest one-sigma (directions above the gate unused)
 };
 
 /// Quaternion attitude filter for one sensor. Allocation-free update.
@@ -211,7 +258,20 @@ class AttitudeFilter {
   /// 6D orientation (sensor -> a z-up frame with arbitrary but slowly drifting heading).
   Eigen::Quaterniond q_earth_sensor_6d() const;
   bool at_rest() const { return st_.rest; }
-  bool mag_disturbed() const { return st_.have_mag && st_.mag_disturbed; }
+  /// Field currently rejected (a reference field exists and this one fails its tests).
+  bool mag_disturbed() const {
+    return st_.have_mag && st_.mag_have_ref && p_.mag_dist_rejection && st_.mag_disturbed;
+  }
+  /// Magnetometer samples arrive but no reference field was accepted yet (start-up): the
+  /// 9D heading is provisional. False without a magnetometer or without disturbance tests.
+  bool mag_no_reference() const {
+    return st_.have_mag && p_.mag_dist_rejection && !st_.mag_have_ref;
+  }
+  FilterOutput output() const;
+  /// Hard-iron offset currently subtracted from the magnetometer, uT (sensor frame).
+  Eigen::Vector3d hard_iron_uT() const { return st_.hi_weight * st_.hard_iron.used_uT; }
+  /// Largest one-sigma of the hard-iron estimate over all directions, uT.
+  double hard_iron_sigma_uT() const { return st_.hard_iron.offset_sigma_uT(); }
   Eigen::Vector3d gyro_bias_rad_s() const { return st_.bias_rad_s; }
   /// Estimated gyro gain error G (scale on the diagonal, misalignment off it): the gyro reads
   /// (I + G) w + bias; the filter integrates the rate corrected by it.
@@ -229,7 +289,7 @@ class AttitudeFilter {
   void update_gyr(const Eigen::Vector3d& gyr, double dt_s);
   void update_acc(const Eigen::Vector3d& acc, double dt_s);
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
-  void update_hard_iron(const Eigen::Vector3d& mag);
+  void select_hard_iron(const Eigen::Vector3d& m_raw_e, const Eigen::Vector3d& m_corr_e);
   void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
   void update_gain(const Eigen::Vector2d& residual, const Eigen::Matrix<double, 2, 9>& reg,
                    const Eigen::Matrix3d& r_lp);

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "mocap/filter/broad_csv.hpp"
@@ -22,5 +23,14 @@ void attitude_error_angles(const Eigen::Quaterniond& q_est, const Eigen::Quatern
 
 /// Scores estimates (one per sample) against the trial's reference over movement samples.
 AttitudeErrors score_trial(const BroadTrial& trial, const std::vector<Eigen::Quaterniond>& est);
+
+/// VQF 2.1.1 per-trial figures (9D total, 9D heading, 6D inclination, degrees) from the
+/// dataset README, for the trial whose name starts with prefix ("36_").
+struct VqfRef {
+  const char* prefix;
+  double total, heading, incl6;
+};
+/// The VQF figures for a trial name, or nullptr for a trial the README does not list.
+const VqfRef* vqf_reference(const std::string& trial_name);
 
 }  // namespace mocap

@@ -1,0 +1,112 @@
+// AttitudeFilter start-up: the "no reference field yet" state (distinct from "disturbed"), and
+// a sensor that starts beside a magnet and then leaves it, on synthetic streams with truth.
+#include <gtest/gtest.h>
+
+#include "mocap/filter/attitude_filter.hpp"
+#include "synth.hpp"
+
+namespace mocap::test {
+namespace {
+
+Eigen::Quaterniond start_attitude() {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(-1.1, Eigen::Vector3d::UnitZ()) *
+                            Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitX()));
+}
+
+double heading_err_deg(const Eigen::Quaterniond& est, const Eigen::Quaterniond& truth) {
+  // Heading part of the error: the error rotation's component about earth z.
+  const Eigen::Quaterniond e = est * truth.conjugate();
+  const Eigen::Vector3d x = e * Eigen::Vector3d::UnitX();
+  return std::abs(std::atan2(x.y(), x.x())) / kDeg;
+}
+
+TEST(AttitudeStartup, NoReferenceFlagIsSeparateFromDisturbed) {
+  SynthConfig c;
+  c.q0 = start_attitude();
+  c.duration_s = 50;
+  // A magnet passes by at 30..32 s, after the reference was accepted.
+  c.mag_earth = [](double t) -> Eigen::Vector3d {
+    Eigen::Vector3d m(0, 20, -45);
+    if (t > 30 && t < 32) m += Eigen::Vector3d(25, 0, 10);
+    return m;
+  };
+  const auto s = make_stream(c);
+  AttitudeFilter f;
+  EXPECT_FALSE(f.mag_no_reference());  // no magnetometer seen yet
+  bool no_ref_early = true, disturbed_early = false, no_ref_late = false, flagged = false;
+  for (const auto& smp : s.samples) {
+    f.update(smp);
+    const double t = smp.t_host_ns * 1e-9;
+    const FilterOutput o = f.output();
+    EXPECT_EQ(o.mag_no_reference, f.mag_no_reference());
+    EXPECT_EQ(o.mag_disturbed, f.mag_disturbed());
+    EXPECT_FALSE(o.mag_no_reference && o.mag_disturbed);  // two distinct states
+    if (t < 4) {
+      no_ref_early &= o.mag_no_reference;
+      disturbed_early |= o.mag_disturbed;
+    }
+    if (t > 10) no_ref_late |= o.mag_no_reference;
+    if (t > 30.2 && t < 32) flagged |= o.mag_disturbed;
+  }
+  EXPECT_TRUE(no_ref_early);      // start-up: no reference field yet ...
+  EXPECT_FALSE(disturbed_early);  // ... which is not a disturbance
+  EXPECT_FALSE(no_ref_late);      // the static earth field became the reference
+  EXPECT_TRUE(flagged);           // and a passing magnet is a disturbance, not start-up
+  EXPECT_LT(heading_err_deg(f.q_earth_sensor(), s.truth.back()), 1.5);
+}
+
+TEST(AttitudeStartup, NoMagnetometerMeansNoReferenceFlagOff) {
+  SynthConfig c;
+  c.duration_s = 5;
+  auto s = make_stream(c);
+  AttitudeFilter f;
+  for (auto smp : s.samples) {
+    smp.valid &= ~kFieldMag;
+    f.update(smp);
+  }
+  EXPECT_FALSE(f.mag_no_reference());
+  EXPECT_FALSE(f.mag_disturbed());
+}
+
+// The sensor starts next to a magnet and moves around in its gradient (hand-like motion), so
+// the field it sees changes in norm and direction; at 8 s it is carried away from the magnet.
+// The magnet's field must not become the reference ("north"), and once away the heading must
+// converge on the earth field.
+TEST(AttitudeStartup, MagnetAtStartThenLeaving) {
+  SynthConfig c;
+  c.q0 = start_attitude();
+  c.duration_s = 45;
+  c.gyr_true = [](double t) -> Eigen::Vector3d {
+    return Eigen::Vector3d(0.8 * std::sin(1.3 * t), 0.6 * std::sin(0.9 * t + 1),
+                           0.7 * std::sin(0.6 * t + 2));
+  };
+  const double leave_s = 8;
+  c.mag_earth = [leave_s](double t) -> Eigen::Vector3d {
+    Eigen::Vector3d m(0, 20, -45);
+    // Near the magnet: a 15-35 uT field whose direction turns as the sensor moves.
+    const double fade = t < leave_s ? 1.0 : std::max(0.0, 1.0 - (t - leave_s));
+    const double a = 0.8 * std::sin(0.7 * t), mag = 25 + 10 * std::sin(1.1 * t);
+    m += fade * mag * Eigen::Vector3d(std::cos(a), std::sin(a), 0.3);
+    return m;
+  };
+  const auto s = make_stream(c);
+  AttitudeFilter f;
+  bool ref_near_magnet = false, disturbed_late = false;
+  double max_err_late = 0;
+  for (size_t i = 0; i < s.samples.size(); ++i) {
+    f.update(s.samples[i]);
+    const double t = s.samples[i].t_host_ns * 1e-9;
+    ASSERT_TRUE(f.q_earth_sensor().coeffs().allFinite());
+    if (t > 1 && t < leave_s) ref_near_magnet |= !f.mag_no_reference();
+    if (t > 35) {
+      disturbed_late |= f.mag_disturbed() || f.mag_no_reference();
+      max_err_late = std::max(max_err_late, heading_err_deg(f.q_earth_sensor(), s.truth[i]));
+    }
+  }
+  EXPECT_FALSE(ref_near_magnet);  // an inconsistent field is never a reference
+  EXPECT_FALSE(disturbed_late);   // the earth field is the reference once away
+  EXPECT_LT(max_err_late, 3.0);
+}
+
+}  // namespace
+}  // namespace mocap::test
