@@ -3,6 +3,7 @@
 // with and without magnetic disturbances. Prints JSON (per-joint angle RMSE, segment orientation
 // RMSE, root drift vs ground truth) and, with --markdown, the table for docs/accuracy.md.
 #include <cstdio>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -73,6 +74,14 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
                                   {"rms_residual", e.rms_residual},
                                   {"parent_travel_deg", e.parent_travel_deg},
                                   {"parent_valid", e.parent_valid}};
+  }
+  for (size_t h = 0; h < r.coupling.size(); ++h) {
+    const CouplingHinge& c = r.coupling[h];
+    const CouplingPair& pr = kCouplingPairs[h];
+    const std::string key = std::string(name(pr.parent)) + "-" + std::string(name(pr.child));
+    j["heading_coupling"][key] = {{"offset_deg", c.offset_deg},
+                                  {"last_residual_deg", c.last_residual_deg},
+                                  {"observed_s", c.observed_s}};
   }
   j["root_drift_m"] = r.root_drift_m;
   j["root_max_error_m"] = r.root_max_error_m;
@@ -145,7 +154,12 @@ int run_accuracy(int argc, char** argv) {
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
-      .flag("hold", "hold each disturbed sensor's heading on its gyro (heading_hold.hpp)")
+      .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
+      .option("coupling-param",
+              "HeadingCouplingOptions overrides, comma list of name=value "
+              "(tau_s, min_flex_deg, min_axis_horizontal, "
+              "max_elevation_mismatch, max_correction_deg, max_residual_deg)")
+      .flag("no-carry", "heading coupling: do not carry a child's correction to the next segment")
       .flag("no-refine", "N-pose calibration only (no hinge-motion refinement)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
@@ -173,7 +187,34 @@ int run_accuracy(int argc, char** argv) {
   else if (heading == "truth")
     base.heading = HeadingSource::explicit_heading;
   if (args.has("no-refine")) base.hinge_refine.enabled = false;
-  base.heading_hold.enabled = args.has("hold");
+  const std::string coupling = args.get_or("coupling", "on");
+  if (coupling != "on" && coupling != "off") {
+    std::fprintf(stderr, "mocap bench accuracy: --coupling must be on or off\n");
+    return 2;
+  }
+  base.heading_coupling.enabled = coupling == "on";
+  for (const std::string& kv : expand(args.get_or("coupling-param", ""), {})) {
+    if (kv.empty()) continue;
+    const size_t eq = kv.find('=');
+    HeadingCouplingOptions& c = base.heading_coupling;
+    const std::string k = kv.substr(0, eq);
+    double* field = k == "tau_s"                    ? &c.tau_s
+                    : k == "min_flex_deg"           ? &c.min_flex_deg
+                    : k == "min_axis_horizontal"    ? &c.min_axis_horizontal
+                    : k == "max_elevation_mismatch" ? &c.max_elevation_mismatch
+                    : k == "max_correction_deg"     ? &c.max_correction_deg
+                    : k == "max_residual_deg"       ? &c.max_residual_deg
+                    : k == "disturbed_weight"       ? &c.disturbed_weight
+                                                    : nullptr;
+    char* end = nullptr;
+    const double v = eq == std::string::npos ? 0 : std::strtod(kv.c_str() + eq + 1, &end);
+    if (!field || eq == std::string::npos || !end || *end != '\0') {
+      std::fprintf(stderr, "mocap bench accuracy: bad --coupling-param '%s'\n", kv.c_str());
+      return 2;
+    }
+    *field = v;
+  }
+  if (args.has("no-carry")) base.heading_coupling.carry_distal = false;
   if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();

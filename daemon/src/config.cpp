@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "mocap/core/segments.hpp"
+#include "mocap/core/thread_priority.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
 namespace mocap::daemon {
@@ -349,6 +350,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     p.num("rate_hz", c.pipeline.rate_hz, 1, 2000);
     p.boolean("publish_every_sample", c.pipeline.publish_every_sample);
     p.num("stale_after_ms", c.pipeline.stale_after_ms, 10, 60000);
+    p.integer("realtime_priority", c.pipeline.realtime_priority, 0, kMaxRealtimePriority);
     p.finish();
   }
   if (const toml::table* ft = r.table("filter")) {
@@ -396,6 +398,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     k.num("capture_s", c.calibration.capture_s, 0.05, 10);
     k.str("file", c.calibration.file);
     k.boolean("refine_hinges", c.calibration.refine_hinges);
+    k.boolean("heading_coupling", c.calibration.heading_coupling);
     k.finish();
   }
   if (const toml::table* outs = r.table("outputs")) {
@@ -617,7 +620,8 @@ std::string config_to_toml(const Config& c) {
                                     {"control_socket", c.daemon.control_socket}});
   root.insert("pipeline", toml::table{{"rate_hz", c.pipeline.rate_hz},
                                       {"publish_every_sample", c.pipeline.publish_every_sample},
-                                      {"stale_after_ms", c.pipeline.stale_after_ms}});
+                                      {"stale_after_ms", c.pipeline.stale_after_ms},
+                                      {"realtime_priority", c.pipeline.realtime_priority}});
   {
     toml::table f{{"use_mag", c.filter.use_mag}};
     for (const auto& [k, v] : c.filter.params) {
@@ -638,7 +642,8 @@ std::string config_to_toml(const Config& c) {
                                          {"countdown_s", c.calibration.countdown_s},
                                          {"capture_s", c.calibration.capture_s},
                                          {"file", c.calibration.file},
-                                         {"refine_hinges", c.calibration.refine_hinges}});
+                                         {"refine_hinges", c.calibration.refine_hinges},
+                                         {"heading_coupling", c.calibration.heading_coupling}});
   toml::table outs;
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
                                   {"bind", c.outputs.json.bind},

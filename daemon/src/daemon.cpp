@@ -42,6 +42,7 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
   d.first_sensor_id = static_cast<uint16_t>(i);
   d.axis_remap = s.axis_remap;
   d.options = s.options;
+  d.realtime_priority = cfg.pipeline.realtime_priority;
   return d;
 }
 

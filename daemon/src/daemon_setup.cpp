@@ -54,6 +54,8 @@ int run_replay_daemon(const std::string& path, double speed, const Config* rig, 
     std::unique_ptr<SampleSource> src =
         std::make_unique<PrefetchSource>(open_sample_source(path, rig));
     Config cfg = src->config();
+    // A replay uses the session's own calibration and never writes the live calibration file.
+    cfg.calibration.file.clear();
     RigEngine engine(cfg, &log);
     if (const std::string ct = src->calibration_text(); !ct.empty())
       engine.skeleton().set_calibration(parse_calibration(ct, path + " (calibration)"));

@@ -27,6 +27,7 @@ SkeletonOptions skeleton_options(const Config& cfg) {
   o.root.pinned = !cfg.body.root_motion;
   o.stale_after_ns = static_cast<int64_t>(cfg.pipeline.stale_after_ms * 1e6);
   o.hinge_refine.enabled = cfg.calibration.refine_hinges;
+  o.heading_coupling.enabled = cfg.calibration.heading_coupling;
   return o;
 }
 
@@ -71,6 +72,7 @@ RigEngine::RigEngine(const Config& cfg, Logger* log)
   const std::string& file = cfg.calibration.file;
   if (!file.empty() && std::filesystem::exists(file)) {
     skeleton_.set_calibration(load_calibration(file));
+    saved_revision_ = skeleton_.calibration_revision();
     if (log_) log_->info("calibration loaded from %s", file.c_str());
   }
 }
@@ -92,13 +94,7 @@ void RigEngine::on_sample(int i, const ImuSample& s) {
       calib_message_ = r.message;
       if (r.ok()) {
         skeleton_.set_calibration(r.calibration);
-        if (!cfg_.calibration.file.empty()) {
-          try {
-            save_calibration(r.calibration, cfg_.calibration.file);
-          } catch (const std::exception& e) {
-            if (log_) log_->error("cannot save calibration: %s", e.what());
-          }
-        }
+        save_calibration_file(s.t_host_ns);
         if (log_) log_->info("calibration done: %s", r.message.c_str());
       } else if (log_) {
         log_->warn("calibration %s: %s",
@@ -109,8 +105,25 @@ void RigEngine::on_sample(int i, const ImuSample& s) {
   }
 }
 
-void RigEngine::build_frame(int64_t, PoseFrame& out) {
+void RigEngine::build_frame(int64_t t_ns, PoseFrame& out) {
   skeleton_.solve(out);
+  // The refinement (or a heading reset) changed the calibration: save it, throttled.
+  if (skeleton_.calibration_revision() != saved_revision_ &&
+      (saved_t_ns_ == INT64_MIN ||
+       static_cast<double>(t_ns - saved_t_ns_) * 1e-9 >= kSaveRefinedEveryS))
+    save_calibration_file(t_ns);
+}
+
+void RigEngine::save_calibration_file(int64_t t_ns) {
+  saved_revision_ = skeleton_.calibration_revision();
+  saved_t_ns_ = t_ns;
+  const Calibration& c = skeleton_.calibration();
+  if (cfg_.calibration.file.empty() || !c.valid) return;
+  try {
+    save_calibration(c, cfg_.calibration.file);
+  } catch (const std::exception& e) {
+    if (log_) log_->error("cannot save calibration: %s", e.what());
+  }
 }
 
 SensorFilterState RigEngine::sensor_state(int i) const {

@@ -63,7 +63,6 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       throw std::invalid_argument("accuracy: filter parameter '" + a + "': " + err);
   }
   std::vector<AttitudeFilter> filters(Performer::kSensorCount, AttitudeFilter(fp));
-  std::vector<HeadingHold> holds(Performer::kSensorCount, HeadingHold(o.heading_hold));
   CalibratorOptions copt;
   copt.capture_s = o.capture_s;
   copt.heading = o.heading;
@@ -72,6 +71,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   Calibrator calibrator(rig, copt);
   SkeletonOptions sopt;
   sopt.hinge_refine = o.hinge_refine;
+  sopt.heading_coupling = o.heading_coupling;
   Skeleton skeleton(BodyModel(perf.dims()), default_joint_limits(), rig, sopt);
 
   const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
@@ -108,8 +108,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       AttitudeFilter& f = filters[s.sensor_id];
       f.update(s);
       const int seg = index(Performer::sensor_segment(s.sensor_id));
-      const Eigen::Quaterniond q = holds[s.sensor_id].update(
-          f.q_earth_sensor(), f.q_earth_sensor_6d(), f.mag_disturbed(), s.t_host_ns);
+      const Eigen::Quaterniond q = f.q_earth_sensor();
       if (calibrator.capturing()) {
         calibrator.add_sample(seg, q, s.t_host_ns, &s.acc_m_s2);
       } else if (r.calibrated) {
@@ -197,6 +196,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   const Calibration& used = skeleton.calibration();
   r.hinges_identified = skeleton.hinge_refiner().valid_hinges();
   r.hinges = skeleton.hinge_refiner().hinges();
+  r.coupling = skeleton.heading_coupling().hinges();
   for (int id = 0; id < Performer::kSensorCount; ++id) {
     const int s = index(Performer::sensor_segment(id));
     const Eigen::Quaterniond& q_seg_sensor = perf.mount(id).q_segment_sensor;

@@ -16,6 +16,7 @@ Skeleton::Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping
       rig_(rig),
       opt_(options),
       refiner_(rig, options.hinge_refine),
+      coupling_(rig, options.heading_coupling),
       root_(model, options.root) {
   validate(limits_);
   q_es_.fill(Eigen::Quaterniond::Identity());
@@ -57,7 +58,9 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
 
 void Skeleton::set_calibration(const Calibration& c) {
   calib_ = calib_base_ = c;
+  ++calib_revision_;
   refiner_.reset();
+  coupling_.reset();
 }
 
 void Skeleton::reset_heading(const double* target_heading_deg) {
@@ -74,6 +77,7 @@ void Skeleton::reset_heading(const double* target_heading_deg) {
   }
   calib_ =
       HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(), refiner_.common_yaw_rad());
+  ++calib_revision_;
 }
 
 void Skeleton::set_sensor_live(int segment, bool live) {
@@ -112,9 +116,21 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
     if (refiner_.update(t_now_ns)) {
       calib_ = HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(),
                                        refiner_.common_yaw_rad());
+      ++calib_revision_;
       for (int i = 0; i < kSegmentCount; ++i)
         if (live[i]) q_earth_[i] = calib_.segment_from_sensor(i, q_es_[i]);
     }
+  }
+  // Heading coupling at the hinges: measured on the calibrated orientations, applied on top.
+  if (opt_.heading_coupling.enabled && calib_.valid) {
+    std::array<bool, kSegmentCount> fresh{}, disturbed{};
+    for (int i = 0; i < kSegmentCount; ++i) {
+      fresh[i] = live[i] && !(flags[i] & kSegStale);
+      disturbed[i] = (in_flags_[i] & kSegMagDisturbed) != 0;
+    }
+    coupling_.update(q_earth_, fresh, disturbed, t_now_ns);
+    for (int i = 0; i < kSegmentCount; ++i)
+      if (live[i]) q_earth_[i] = coupling_.apply(i, q_earth_[i]);
   }
   // 2. Segments without (live) sensor, in depth-first order: slerp from the parent towards the
   //    tracked segment further down the chain, or copy the parent.

@@ -7,7 +7,6 @@
 #include <random>
 
 #include "mocap/skeleton/body_model.hpp"
-#include "mocap/skeleton/heading_hold.hpp"
 #include "mocap/skeleton/hinge_calibration.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 #include "skeleton_test_util.hpp"
@@ -195,28 +194,6 @@ TEST(HingeCalibration, ApplyIsAConjugationPerSegment) {
   const Eigen::Quaterniond expect = yaw_rotation(0.02 - 0.1) * q * yaw_rotation(0.1);
   EXPECT_LT(angle_deg(c.segment_from_sensor(s, q), expect), 1e-9);
   EXPECT_NEAR(c.heading_deg, 0.02 * kRadToDeg, 1e-12);
-}
-
-// Heading hold: while the magnetometer is flagged disturbed the 9-D heading's excursions are
-// ignored (the 6-D orientation turned by the held offset); once clear, the offset follows the
-// filter's at the bounded slew rate.
-TEST(HeadingHold, HoldsWhileDisturbedAndSlewsBack) {
-  HeadingHold h(HeadingHoldOptions{.enabled = true, .slew_deg_s = 2.0});
-  const Eigen::Quaterniond q6 = axis_rotation(0, 0.3) * axis_rotation(1, 0.2);
-  const auto q9 = [&](double offset_deg) { return yaw_rotation(offset_deg * kDegToRad) * q6; };
-  int64_t t = 0;
-  Eigen::Quaterniond out = h.update(q9(10), q6, false, t);
-  EXPECT_LT(angle_deg(out, q9(10)), 1e-9);
-  for (int k = 1; k <= 100; ++k)  // 1 s disturbed: the filter's heading swings by 30 deg
-    out = h.update(q9(40), q6, true, t += 10 * kMs);
-  EXPECT_TRUE(h.holding());
-  EXPECT_LT(angle_deg(out, q9(10)), 1e-9);
-  for (int k = 1; k <= 100; ++k)  // 1 s clear: follows at 2 deg/s
-    out = h.update(q9(40), q6, false, t += 10 * kMs);
-  EXPECT_FALSE(h.holding());
-  EXPECT_NEAR(h.offset_rad() * kRadToDeg, 12.0, 1e-6);
-  HeadingHold off;  // disabled: the 9-D orientation passes through
-  EXPECT_LT(angle_deg(off.update(q9(40), q6, true, 0), q9(40)), 1e-9);
 }
 
 }  // namespace

@@ -124,6 +124,8 @@ int run_replay(int argc, char** argv) {
     Config cfg = src->config();
     // Calibrate immediately at the chosen moment (the file is the countdown).
     cfg.calibration.countdown_s = 0;
+    // A replay uses the session's own calibration and never writes the live calibration file.
+    cfg.calibration.file.clear();
     RigEngine engine(cfg);
     if (const std::string ct = src->calibration_text(); !ct.empty() && !opt.calibrate_pose)
       engine.skeleton().set_calibration(parse_calibration(ct, input + " (calibration)"));

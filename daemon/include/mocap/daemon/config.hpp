@@ -52,6 +52,9 @@ struct CalibrationConfig {
   /// Refine the calibration from knee/elbow motion after it (skeleton/hinge_calibration.hpp):
   /// each segment's mounting yaw and the body heading. Off: the still pose alone.
   bool refine_hinges = true;
+  /// Kinematic heading coupling at the knees and elbows (skeleton/heading_coupling.hpp): keeps
+  /// each hinge's two sensors on one heading while their filters' headings drift apart.
+  bool heading_coupling = true;
   /// Body forward (+x) in the pelvis sensor's frame: the heading axis of a calibration. Not a
   /// file key: the default suits a pelvis sensor worn with +x forward; the demo sets its
   /// performer's belt-clip axis.
@@ -62,6 +65,9 @@ struct PipelineConfig {
   double rate_hz = 120.0;             ///< pose frame rate
   bool publish_every_sample = false;  ///< also publish a frame on every sample (low latency)
   double stale_after_ms = 250.0;      ///< a sensor silent this long degrades its segment
+  /// SCHED_FIFO priority (1..49) of the device readers, the pipeline and the pose stream; 0 =
+  /// normal scheduling. Keeps the latency low on a busy machine (needs CAP_SYS_NICE/LimitRTPRIO).
+  int realtime_priority = 0;
 };
 
 struct JsonOutputConfig {

@@ -1,7 +1,10 @@
 // The real PoseEngine: one AttitudeFilter per sensor, the skeleton's Calibrator for N-/T-pose
-// captures, and the Skeleton solver (forward kinematics, joint limits, root motion).
+// captures, and the Skeleton solver (forward kinematics, joint limits, root motion). The
+// calibration in use (the pose capture refined from knee/elbow motion, heading resets) is saved
+// to calibration.file whenever it changes, at most every kSaveRefinedEveryS of sample time.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -20,6 +23,8 @@ FilterParams filter_params(const FilterConfig& f);
 
 class RigEngine final : public PoseEngine {
  public:
+  static constexpr double kSaveRefinedEveryS = 5.0;
+
   /// Builds filters and skeleton for the config's sensors; loads calibration.file if it exists.
   /// Throws std::runtime_error on an unreadable calibration or body file.
   explicit RigEngine(const Config& cfg, Logger* log = nullptr);
@@ -45,6 +50,9 @@ class RigEngine final : public PoseEngine {
   Calibrator calibrator_;
   int64_t newest_t_ns_ = 0;
   std::string calib_message_;
+  uint64_t saved_revision_ = 0;     ///< skeleton calibration revision last saved (or loaded)
+  int64_t saved_t_ns_ = INT64_MIN;  ///< sample time of that save
+  void save_calibration_file(int64_t t_ns);
 };
 
 }  // namespace mocap::daemon

@@ -11,7 +11,7 @@
 #include "mocap/core/segments.hpp"
 #include "mocap/sim/sensor_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
-#include "mocap/skeleton/heading_hold.hpp"
+#include "mocap/skeleton/heading_coupling.hpp"
 #include "mocap/skeleton/hinge_calibration.hpp"
 
 namespace mocap::sim {
@@ -32,9 +32,9 @@ struct AccuracyOptions {
   double explicit_heading_deg = 0;
   /// Hinge-motion refinement of the calibration (on by default, as in the daemon).
   HingeRefineOptions hinge_refine{};
-  /// While a filter flags its magnetometer disturbed, use its 6-D orientation with the last
-  /// trusted heading offset (heading_hold.hpp; opt-in).
-  HeadingHoldOptions heading_hold{};
+  /// Heading coupling at the knees and elbows (heading_coupling.hpp), as the daemon's
+  /// calibration.heading_coupling (on by default in both).
+  HeadingCouplingOptions heading_coupling{.enabled = true};
   /// AttitudeFilter parameter overrides ("name=value", as `mocap filter --param`), e.g. to see
   /// what a filter change would gain; default: the filter's defaults, as the daemon uses.
   std::vector<std::string> filter_params;
@@ -73,7 +73,8 @@ struct AccuracyResult {
   /// Fraction of evaluated frames the filter flagged the sensor's magnetometer as disturbed.
   std::array<double, kSegmentCount> sensor_mag_disturbed_fraction{};
   int hinges_identified = 0;  ///< knees/elbows whose axis the refinement identified
-  std::array<HingeEstimate, kRefinePairs.size()> hinges{};  ///< the refinement's state
+  std::array<HingeEstimate, kRefinePairs.size()> hinges{};      ///< the refinement's state
+  std::array<CouplingHinge, kCouplingPairs.size()> coupling{};  ///< the heading coupling's
 };
 
 /// Joints whose both segments carry sensors and are 3-DOF (waist, shoulders, wrists, hips,

@@ -16,6 +16,7 @@
 
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/heading_coupling.hpp"
 #include "mocap/skeleton/hinge_calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
@@ -41,6 +42,10 @@ struct SkeletonOptions {
   /// calibration (hinge_calibration.hpp). Off by default here; the daemon and the accuracy
   /// benchmark turn it on.
   HingeRefineOptions hinge_refine{.enabled = false};
+  /// Heading coupling at the knees and elbows (heading_coupling.hpp): each hinge child's heading
+  /// follows its parent's through the hinge constraint. Off by default here; the daemon and the
+  /// accuracy benchmark set it from their configuration.
+  HeadingCouplingOptions heading_coupling{};
 };
 
 class Skeleton {
@@ -53,9 +58,14 @@ class Skeleton {
   void set_calibration(const Calibration& c);
   /// The calibration in use: the one set, refined by hinge motion when enabled (save this one).
   const Calibration& calibration() const { return calib_; }
+  /// Counts every change of calibration() (set, heading reset, refinement): a caller that saves
+  /// the calibration compares it with the value at its last save.
+  uint64_t calibration_revision() const { return calib_revision_; }
   void clear_calibration() { set_calibration(Calibration{}); }
   /// The hinge refinement's state (yaw offsets found so far, per-hinge estimates).
   const HingeAxisRefiner& hinge_refiner() const { return refiner_; }
+  /// The heading coupling's state (per-hinge corrections).
+  const HeadingCoupling& heading_coupling() const { return coupling_; }
   /// Heading-only reset from the latest sensor orientations (the person stands facing forward):
   /// every segment takes the pelvis's heading, or `target_heading_deg` when given (0 = face +x).
   void reset_heading(const double* target_heading_deg = nullptr);
@@ -100,7 +110,9 @@ class Skeleton {
   SkeletonOptions opt_;
   Calibration calib_;       ///< in use: calib_base_ refined by the hinge yaw offsets
   Calibration calib_base_;  ///< as set (plus heading resets)
+  uint64_t calib_revision_ = 0;
   HingeAxisRefiner refiner_;
+  HeadingCoupling coupling_;
   RootMotion root_;
 
   // Inputs.

@@ -1,0 +1,106 @@
+// The daemon's calibration file holds the calibration in use: the N-pose capture first, then the
+// same calibration refined from knee/elbow motion (HingeAxisRefiner), so a restart (and a
+// recording, which stores the file's content) gets the refined one back. The virtual performer
+// stands in the N-pose and walks; its samples go through the real RigEngine.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "mocap/daemon/config.hpp"
+#include "mocap/daemon/rig_engine.hpp"
+#include "mocap/sim/performer.hpp"
+#include "mocap/sim/sensor_model.hpp"
+#include "mocap/skeleton/calibration.hpp"
+
+namespace mocap::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+double max_quat_diff(const Calibration& a, const Calibration& b) {
+  double d = std::abs(a.heading_deg - b.heading_deg) * 1e-3;
+  for (int i = 0; i < kSegmentCount; ++i) {
+    if (a.calibrated[i] != b.calibrated[i]) return 1.0;
+    d = std::max(d, (a.q_sensor_segment[i].coeffs() - b.q_sensor_segment[i].coeffs()).norm());
+    d = std::max(d, (a.q_correction[i].coeffs() - b.q_correction[i].coeffs()).norm());
+  }
+  return d;
+}
+
+TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
+  const fs::path file =
+      fs::temp_directory_path() / ("mocap-refined-calib-" + std::to_string(getpid()) + ".toml");
+  fs::remove(file);
+  ConfigErrors errs;
+  std::optional<Config> parsed = parse_config("", "<defaults>", {}, errs);
+  ASSERT_TRUE(parsed) << errs.to_string();
+  Config cfg = *parsed;
+  cfg.calibration.file = file.string();
+  const Eigen::Vector3d axis = sim::pelvis_forward_axis_sensor();
+  cfg.calibration.heading_axis_sensor = {axis.x(), axis.y(), axis.z()};
+  for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
+    SensorConfig s;
+    s.name = std::string(sim::Performer::sensor_name(i));
+    s.segment = s.name;
+    s.driver = "direct";
+    cfg.sensors.push_back(s);
+  }
+  sim::PerformerParams pp;
+  pp.motion = "walk";
+  pp.loop = false;
+  sim::Performer perf(pp);
+  const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
+  const double capture_at_s = calib_end_s - 0.3 - cfg.calibration.capture_s;
+  ASSERT_GT(capture_at_s, calib_begin_s + 0.5);
+
+  RigEngine engine(cfg);
+  PoseFrame frame;
+  std::vector<ImuSample> samples;
+  std::string npose_text;
+  bool capture_started = false;
+  const double end_s = perf.track().period_s();
+  for (int k = 1; k * 0.01 <= end_s; ++k) {
+    const int64_t t_ns = static_cast<int64_t>(k) * 10'000'000;
+    samples.clear();
+    perf.step_to(t_ns, samples);
+    for (const ImuSample& s : samples)
+      engine.on_sample(s.sensor_id, s);
+    if (!capture_started && k * 0.01 >= capture_at_s) {
+      engine.calibrate(CalibrationPose::npose);
+      capture_started = true;
+    }
+    engine.build_frame(t_ns, frame);
+    if (npose_text.empty() && fs::exists(file)) npose_text = read_text(file);
+  }
+  ASSERT_FALSE(npose_text.empty()) << engine.last_calibration_message();
+  // The walk identified the knees: the calibration in use differs from the N-pose one ...
+  EXPECT_GE(engine.skeleton().hinge_refiner().valid_hinges(), 2);
+  const Calibration npose = parse_calibration(npose_text);
+  const Calibration& in_use = engine.skeleton().calibration();
+  EXPECT_GT(max_quat_diff(npose, in_use), 1e-3);
+  // ... and the file holds the refined one (the last change is at most kSaveRefinedEveryS old:
+  // one more frame after that interval saves it).
+  const int64_t later_ns =
+      static_cast<int64_t>((end_s + RigEngine::kSaveRefinedEveryS + 0.01) * 1e9);
+  engine.build_frame(later_ns, frame);
+  const Calibration saved = load_calibration(file.string());
+  EXPECT_LT(max_quat_diff(saved, engine.skeleton().calibration()), 1e-12);
+  EXPECT_NEAR(saved.heading_deg, engine.skeleton().calibration().heading_deg, 1e-9);
+  // A restart loads the refined calibration.
+  RigEngine restarted(cfg);
+  EXPECT_LT(max_quat_diff(restarted.skeleton().calibration(), saved), 1e-12);
+  fs::remove(file);
+}
+
+}  // namespace
+}  // namespace mocap::daemon
