@@ -33,26 +33,25 @@ TEST(AttitudeStartup, NoReferenceFlagMarksStartupApartFromDisturbance) {
   const auto s = make_stream(c);
   AttitudeFilter f;
   EXPECT_FALSE(f.mag_no_reference());  // no magnetometer seen yet
-  bool no_ref_early = true, untrusted_early = true, no_ref_late = false, flagged = false;
+  bool no_ref_early = true, disturbed_early = false, no_ref_late = false, flagged = false;
   for (const auto& smp : s.samples) {
     f.update(smp);
     const double t = smp.t_host_ns * 1e-9;
     const FilterOutput o = f.output();
     EXPECT_EQ(o.mag_no_reference, f.mag_no_reference());
     EXPECT_EQ(o.mag_disturbed, f.mag_disturbed());
-    if (o.mag_no_reference) EXPECT_TRUE(o.mag_disturbed);  // not trusted yet
+    EXPECT_FALSE(o.mag_no_reference && o.mag_disturbed);  // two distinct states
     if (t < 4) {
       no_ref_early &= o.mag_no_reference;
-      untrusted_early &= o.mag_disturbed;
+      disturbed_early |= o.mag_disturbed;
     }
     if (t > 10) no_ref_late |= o.mag_no_reference;
-    // Disturbed against a reference: a state of its own.
-    if (t > 30.2 && t < 32) flagged |= o.mag_disturbed && !o.mag_no_reference;
+    if (t > 30.2 && t < 32) flagged |= o.mag_disturbed;
   }
-  EXPECT_TRUE(no_ref_early);     // start-up: no reference field yet ...
-  EXPECT_TRUE(untrusted_early);  // ... so the field is not trusted (flag meaning unchanged)
-  EXPECT_FALSE(no_ref_late);     // the static earth field became the reference
-  EXPECT_TRUE(flagged);          // and a passing magnet is a disturbance, not start-up
+  EXPECT_TRUE(no_ref_early);      // start-up: no reference field yet ...
+  EXPECT_FALSE(disturbed_early);  // ... which is not a disturbance
+  EXPECT_FALSE(no_ref_late);      // the static earth field became the reference
+  EXPECT_TRUE(flagged);           // and a passing magnet is a disturbance, not start-up
   EXPECT_LT(heading_err_deg(f.q_earth_sensor(), s.truth.back()), 1.5);
 }
 

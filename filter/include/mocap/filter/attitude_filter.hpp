@@ -235,11 +235,12 @@ struct FilterOutput {
   Eigen::Vector3d gyro_bias_rad_s = Eigen::Vector3d::Zero();
   double heading_sigma_rad = 0;
   bool at_rest = false;
-  /// The field is not trusted: rejected by the disturbance tests, or no reference yet.
+  /// The field is currently rejected by the disturbance tests (a reference exists and the
+  /// field does not match it); the heading runs on the gyro.
   bool mag_disturbed = false;
   /// No reference field accepted yet (start-up): the heading follows the field
-  /// provisionally (while it is self-consistent) and must not be trusted. Disturbed against
-  /// a reference = mag_disturbed && !mag_no_reference.
+  /// provisionally (while it is self-consistent) and must not be trusted yet; distinct from
+  /// mag_disturbed (never both).
   bool mag_no_reference = false;
   Eigen::Vector3d hard_iron_uT = Eigen::Vector3d::Zero();  ///< offset subtracted (sensor frame)
   double hard_iron_sigma_uT = 0;  ///< its largest one-sigma (directions above the gate unused)
@@ -259,9 +260,11 @@ class AttitudeFilter {
   /// 6D orientation (sensor -> a z-up frame with arbitrary but slowly drifting heading).
   Eigen::Quaterniond q_earth_sensor_6d() const;
   bool at_rest() const { return st_.rest; }
-  /// Field not trusted: rejected by the disturbance tests, or no reference field accepted yet
-  /// (start-up; then mag_no_reference() is set too). Meaning unchanged from earlier versions.
-  bool mag_disturbed() const { return st_.have_mag && st_.mag_disturbed; }
+  /// Field currently rejected: a reference field exists and this one fails its tests (the
+  /// heading runs on the gyro). False during start-up, see mag_no_reference().
+  bool mag_disturbed() const {
+    return st_.have_mag && st_.mag_have_ref && p_.mag_dist_rejection && st_.mag_disturbed;
+  }
   /// Magnetometer samples arrive but no reference field was accepted yet (start-up): the
   /// 9D heading is provisional. False without a magnetometer or without disturbance tests.
   bool mag_no_reference() const {
