@@ -13,6 +13,7 @@ namespace mocap::filt {
 // uncertainty (perfectly anti-correlated) plus the measurement noise.
 void HardIronEstimator::restart(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es,
                                 const HardIronCoeffs& k) {
+  if (!b_uT.allFinite()) b_uT.setZero();
   if (!(f_uT > 0)) f_uT = std::max((m_uT - b_uT).norm(), 1e-6);
   const double f2 = f_uT * f_uT;
   const double pb = k.p0_offset_rel2 * f2;
