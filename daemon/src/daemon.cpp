@@ -228,6 +228,7 @@ std::string Daemon::status_json() const {
     }
     e["at_rest"] = f.at_rest;
     e["mag_disturbed"] = f.mag_disturbed;
+    e["mag_no_reference"] = f.mag_no_reference;
     e["calibrated"] = f.calibrated;
     e["gyro_bias_dps"] = std::round(s.gyro_bias_dps * 1000) / 1000;
     e["heading_sigma_deg"] = std::round(s.heading_sigma_deg * 10) / 10;

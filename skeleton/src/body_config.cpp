@@ -45,23 +45,17 @@ BodyModelConfig parse_body_config(std::string_view text, std::string_view source
         fail(source, v.source(), "height_m out of range (0.5 .. 2.6 m)");
       cfg.height_m = *h;
     } else if (k == "segment") {
-      const toml::table* segs = v.as_table();
-      if (!segs) fail(source, v.source(), "[segment] must be a table of segment tables");
-      for (auto&& [sk, sv] : *segs) {
-        const auto seg = segment_from_name(sk.str());
-        if (!seg) fail(source, sk.source(), "unknown segment '" + std::string(sk.str()) + "'");
-        const toml::table* st = sv.as_table();
-        if (!st) fail(source, sv.source(), "segment." + std::string(sk.str()) + " must be a table");
-        for (auto&& [fk, fv] : *st) {
-          if (fk == "joint_offset_m")
-            cfg.joint_offset_m[index(*seg)] = read_vec3(source, fv, fk.str(), 2.0);
-          else if (fk == "end_offset_m")
-            cfg.end_offset_m[index(*seg)] = read_vec3(source, fv, fk.str(), 2.0);
-          else
-            fail(source, fk.source(),
-                 "unknown key '" + std::string(fk.str()) + "' in segment." + std::string(sk.str()));
-        }
-      }
+      skeleton_toml::for_each_segment_table(
+          source, v, [&](int i, const std::string& path, const toml::table& st) {
+            for (auto&& [fk, fv] : st) {
+              if (fk == "joint_offset_m")
+                cfg.joint_offset_m[i] = read_vec3(source, fv, fk.str(), 2.0);
+              else if (fk == "end_offset_m")
+                cfg.end_offset_m[i] = read_vec3(source, fv, fk.str(), 2.0);
+              else
+                fail(source, fk.source(), "unknown key '" + std::string(fk.str()) + "' in " + path);
+            }
+          });
     } else {
       fail(source, k.source(), "unknown key '" + std::string(k.str()) + "'");
     }

@@ -122,29 +122,22 @@ Calibration parse_calibration(std::string_view text, std::string_view source) {
       }
       if (!have_version) fail(source, v.source(), "[calibration] lacks version");
     } else if (k == "segment") {
-      const toml::table* segs = v.as_table();
-      if (!segs) fail(source, v.source(), "[segment] must be a table of segment tables");
-      for (auto&& [sk, sv] : *segs) {
-        const auto seg = segment_from_name(sk.str());
-        if (!seg) fail(source, sk.source(), "unknown segment '" + std::string(sk.str()) + "'");
-        const toml::table* st = sv.as_table();
-        if (!st) fail(source, sv.source(), "segment." + std::string(sk.str()) + " must be a table");
-        const int i = index(*seg);
-        bool have_q = false;
-        for (auto&& [fk, fv] : *st) {
-          if (fk == "q_sensor_segment") {
-            c.q_sensor_segment[i] = read_quat(source, fv, fk.str());
-            have_q = true;
-          } else if (fk == "q_correction") {
-            c.q_correction[i] = read_quat(source, fv, fk.str());
-          } else {
-            fail(source, fk.source(), "unknown key '" + std::string(fk.str()) + "'");
-          }
-        }
-        if (!have_q)
-          fail(source, sv.source(), "segment." + std::string(sk.str()) + " lacks q_sensor_segment");
-        c.calibrated[i] = true;
-      }
+      skeleton_toml::for_each_segment_table(
+          source, v, [&](int i, const std::string& path, const toml::table& st) {
+            bool have_q = false;
+            for (auto&& [fk, fv] : st) {
+              if (fk == "q_sensor_segment") {
+                c.q_sensor_segment[i] = read_quat(source, fv, fk.str());
+                have_q = true;
+              } else if (fk == "q_correction") {
+                c.q_correction[i] = read_quat(source, fv, fk.str());
+              } else {
+                fail(source, fk.source(), "unknown key '" + std::string(fk.str()) + "'");
+              }
+            }
+            if (!have_q) fail(source, st.source(), path + " lacks q_sensor_segment");
+            c.calibrated[i] = true;
+          });
     } else {
       fail(source, k.source(), "unknown key '" + std::string(k.str()) + "'");
     }
