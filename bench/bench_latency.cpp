@@ -4,14 +4,19 @@
 // sensors round-robin, evenly spread over each sample period, stamping monotonic time at each
 // write; a client thread stamps each received line. In per-sample mode the frame a sample
 // triggers shows that sensor with age_ms 0.0, so the k-th such line of sensor i is matched to
-// the k-th write of sensor i (first such line received after the write).
+// the k-th write of sensor i (first such line received after the write). With
+// --realtime-priority N (default 20) mocapd runs its reader, pipeline and stream threads in
+// SCHED_FIFO, and so do the writer (standing in for sensor hardware) and the client; 0 measures
+// normal scheduling.
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -20,6 +25,7 @@
 #include "bench.hpp"
 #include "daemon_harness.hpp"
 #include "mocap/core/cli_args.hpp"
+#include "mocap/core/thread_priority.hpp"
 #include "mocap/core/time.hpp"
 
 namespace mocap::bench {
@@ -28,8 +34,19 @@ namespace {
 
 struct Line {
   int64_t t_recv_ns;
+  int64_t t_frame_ns;  ///< the line's "t": the sample's host time (read time mapped from the device
+                       ///< clock, <= read)
   uint32_t zero_age_mask;  ///< sensors shown with age_ms 0.0 (the sample that made the frame)
 };
+
+/// The line's "t" (seconds, host monotonic clock) in ns; -1 if absent.
+int64_t frame_time_ns(const char* b, const char* e) {
+  static constexpr char kT[] = "\"t\":";
+  const std::string_view line(b, static_cast<size_t>(e - b));
+  const size_t pos = line.find(kT);
+  if (pos == std::string_view::npos) return -1;
+  return static_cast<int64_t>(std::llround(std::strtod(b + pos + sizeof kT - 1, nullptr) * 1e9));
+}
 
 /// Bit i set if sensor i's age_ms is printed as 0.0.
 uint32_t zero_ages(const char* b, const char* e) {
@@ -61,27 +78,46 @@ int run_latency(int argc, char** argv) {
   args.option("sensors", "number of simulated sensors (default 17, max 32)")
       .option("rate", "sample rate per sensor in Hz (default 200)")
       .option("seconds", "measured duration (default 10)")
+      .option("realtime-priority",
+              "SCHED_FIFO priority for mocapd and the bench threads, 0 = normal (default 20)")
       .flag("help", "show this help");
   if (!args.parse(argc, argv) || args.has("help") || !args.positional().empty()) {
-    std::fprintf(stderr, "usage: mocap bench latency [--sensors N] [--rate HZ] [--seconds S]\n%s",
+    std::fprintf(stderr,
+                 "usage: mocap bench latency [--sensors N] [--rate HZ] [--seconds S] "
+                 "[--realtime-priority N]\n%s",
                  args.help().c_str());
     return args.has("help") ? 0 : 2;
   }
-  double sensors_d = 17, rate = 200, seconds = 10;
+  double sensors_d = 17, rate = 200, seconds = 10, rt_d = 20;
   args.get_double("sensors", sensors_d);
   args.get_double("rate", rate);
   args.get_double("seconds", seconds);
+  args.get_double("realtime-priority", rt_d);
   const int sensors = static_cast<int>(sensors_d);
-  if (sensors < 1 || sensors > 32 || !(rate > 0 && rate <= 2000) || !(seconds > 0)) {
+  const int rt_priority = static_cast<int>(rt_d);
+  if (sensors < 1 || sensors > 32 || !(rate > 0 && rate <= 2000) || !(seconds > 0) ||
+      rt_priority < 0 || rt_priority > kMaxRealtimePriority) {
     std::fprintf(stderr,
-                 "mocap bench latency: need 1..32 sensors, 0 < rate <= 2000, seconds > 0\n");
+                 "mocap bench latency: need 1..32 sensors, 0 < rate <= 2000, seconds > 0, "
+                 "realtime priority 0..%d\n",
+                 kMaxRealtimePriority);
     return 2;
   }
+  // Granted to a probe thread <=> granted to mocapd (same user, same limits). A probe, because
+  // the main thread's policy would be inherited by the mocapd it forks.
+  std::string rt_error;
+  bool rt_granted = false;
+  if (rt_priority > 0)
+    std::thread([&] { rt_granted = set_this_thread_realtime(rt_priority, &rt_error); }).join();
+  if (rt_priority > 0 && !rt_granted)
+    std::fprintf(stderr, "mocap bench latency: %s; measuring normal scheduling\n",
+                 rt_error.c_str());
   const double load_before = load_average_1m();
   RigOptions ro;
   ro.sensors = sensors;
   ro.rate_hz = rate;
   ro.publish_every_sample = true;
+  ro.realtime_priority = rt_granted ? rt_priority : 0;
   try {
     DaemonRig rig(ro);
     if (!rig.wait_streaming(15)) {
@@ -89,6 +125,7 @@ int run_latency(int argc, char** argv) {
                    rig.log_path().c_str());
       return 1;
     }
+    (void)set_this_thread_realtime(ro.realtime_priority, nullptr);  // the writer (this thread)
     const int fd = connect_loopback(rig.json_port(), 5);
     if (fd < 0) {
       std::fprintf(stderr, "mocap bench latency: cannot connect to the JSON stream\n");
@@ -99,6 +136,7 @@ int run_latency(int argc, char** argv) {
     lines.reserve(static_cast<size_t>(sensors * rate * (seconds + 2) * 1.5 + 1000));
     std::atomic<bool> stop{false};
     std::thread client([&] {
+      (void)set_this_thread_realtime(ro.realtime_priority, nullptr);
       std::vector<char> buf(1 << 20);
       size_t have = 0;
       while (!stop) {
@@ -109,7 +147,8 @@ int run_latency(int argc, char** argv) {
         size_t start = 0;
         for (size_t i = have - static_cast<size_t>(n); i < have; ++i) {
           if (buf[i] != '\n') continue;
-          lines.push_back({now, zero_ages(buf.data() + start, buf.data() + i)});
+          lines.push_back({now, frame_time_ns(buf.data() + start, buf.data() + i),
+                           zero_ages(buf.data() + start, buf.data() + i)});
           start = i + 1;
         }
         std::memmove(buf.data(), buf.data() + start, have - start);
@@ -148,6 +187,9 @@ int run_latency(int argc, char** argv) {
     // Match: per sensor, the k-th write -> the first later line showing that sensor at age 0.
     std::vector<double> lat_ms;
     lat_ms.reserve(static_cast<size_t>(sensors * periods));
+    std::vector<double> to_read_ms, from_read_ms;  // split at the sample's host time
+    to_read_ms.reserve(lat_ms.capacity());
+    from_read_ms.reserve(lat_ms.capacity());
     uint64_t unmatched = 0;
     for (int i = 0; i < sensors; ++i) {
       size_t li = 0;
@@ -160,6 +202,10 @@ int run_latency(int argc, char** argv) {
           continue;
         }
         lat_ms.push_back((lines[li].t_recv_ns - w) * 1e-6);
+        if (lines[li].t_frame_ns >= 0) {
+          to_read_ms.push_back((lines[li].t_frame_ns - w) * 1e-6);
+          from_read_ms.push_back((lines[li].t_recv_ns - lines[li].t_frame_ns) * 1e-6);
+        }
         ++li;
       }
     }
@@ -174,16 +220,19 @@ int run_latency(int argc, char** argv) {
     std::printf(
         "{\"benchmark\":\"latency\",\"path\":\"pty bytes -> mocapd (witmotion driver, pipeline "
         "publish_every_sample, JSON server) -> TCP client on loopback\",\n"
-        " \"params\":{\"sensors\":%d,\"rate_hz\":%g,\"seconds\":%g},\n"
+        " \"params\":{\"sensors\":%d,\"rate_hz\":%g,\"seconds\":%g,\"realtime_priority\":%d},\n"
         " \"written\":%llu,\"matched\":%zu,\"unmatched\":%llu,\"short_writes\":%llu,"
         "\"json_lines\":%zu,\"daemon_ring_drops\":%lld,\n"
         " \"latency_ms\":{\"p50\":%.4f,\"p99\":%.4f,\"max\":%.4f},\n"
+        " \"split_ms\":{\"write_to_sample_t\":{\"p50\":%.4f,\"p99\":%.4f},"
+        "\"sample_t_to_client\":{\"p50\":%.4f,\"p99\":%.4f}},\n"
         " \"goal\":{\"p50_ms\":0.3,\"p99_ms\":1.0},\"pass\":%s,\n"
         " \"load_average_1m\":{\"before\":%.2f,\"after\":%.2f}}\n",
-        sensors, rate, seconds, static_cast<unsigned long long>(written), lat_ms.size(),
-        static_cast<unsigned long long>(unmatched), static_cast<unsigned long long>(short_writes),
-        lines.size(), ring_drops, p50, p99, mx, pass ? "true" : "false", load_before,
-        load_average_1m());
+        sensors, rate, seconds, ro.realtime_priority, static_cast<unsigned long long>(written),
+        lat_ms.size(), static_cast<unsigned long long>(unmatched),
+        static_cast<unsigned long long>(short_writes), lines.size(), ring_drops, p50, p99, mx,
+        percentile(to_read_ms, 0.5), percentile(to_read_ms, 0.99), percentile(from_read_ms, 0.5),
+        percentile(from_read_ms, 0.99), pass ? "true" : "false", load_before, load_average_1m());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mocap bench latency: %s\n", e.what());

@@ -72,7 +72,8 @@ DaemonRig::DaemonRig(const RigOptions& o) : opt_(o) {
   std::ostringstream cfg;
   cfg << "[daemon]\nlog_level = \"warn\"\ncontrol_socket = \"" << ctl_ << "\"\n"
       << "[pipeline]\nrate_hz = " << opt_.frame_rate_hz
-      << "\npublish_every_sample = " << (opt_.publish_every_sample ? "true" : "false") << "\n"
+      << "\npublish_every_sample = " << (opt_.publish_every_sample ? "true" : "false")
+      << "\nrealtime_priority = " << opt_.realtime_priority << "\n"
       << "[outputs.json]\nenabled = true\nport = " << port_ << "\n"
       << "[outputs.posture]\nenabled = false\n";
   EncoderOptions eo;

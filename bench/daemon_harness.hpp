@@ -19,6 +19,7 @@ struct RigOptions {
   double rate_hz = 200;
   bool publish_every_sample = false;
   double frame_rate_hz = 120;
+  int realtime_priority = 0;  ///< mocapd's pipeline.realtime_priority
 };
 
 /// N ptys with a WitMotion encoder each, and a mocapd reading them.

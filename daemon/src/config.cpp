@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "mocap/core/segments.hpp"
+#include "mocap/core/thread_priority.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
 namespace mocap::daemon {
@@ -349,6 +350,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     p.num("rate_hz", c.pipeline.rate_hz, 1, 2000);
     p.boolean("publish_every_sample", c.pipeline.publish_every_sample);
     p.num("stale_after_ms", c.pipeline.stale_after_ms, 10, 60000);
+    p.integer("realtime_priority", c.pipeline.realtime_priority, 0, kMaxRealtimePriority);
     p.finish();
   }
   if (const toml::table* ft = r.table("filter")) {
@@ -618,7 +620,8 @@ std::string config_to_toml(const Config& c) {
                                     {"control_socket", c.daemon.control_socket}});
   root.insert("pipeline", toml::table{{"rate_hz", c.pipeline.rate_hz},
                                       {"publish_every_sample", c.pipeline.publish_every_sample},
-                                      {"stale_after_ms", c.pipeline.stale_after_ms}});
+                                      {"stale_after_ms", c.pipeline.stale_after_ms},
+                                      {"realtime_priority", c.pipeline.realtime_priority}});
   {
     toml::table f{{"use_mag", c.filter.use_mag}};
     for (const auto& [k, v] : c.filter.params) {

@@ -42,6 +42,7 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
   d.first_sensor_id = static_cast<uint16_t>(i);
   d.axis_remap = s.axis_remap;
   d.options = s.options;
+  d.realtime_priority = cfg.pipeline.realtime_priority;
   return d;
 }
 
@@ -227,6 +228,7 @@ std::string Daemon::status_json() const {
     }
     e["at_rest"] = f.at_rest;
     e["mag_disturbed"] = f.mag_disturbed;
+    e["mag_no_reference"] = f.mag_no_reference;
     e["calibrated"] = f.calibrated;
     e["gyro_bias_dps"] = std::round(s.gyro_bias_dps * 1000) / 1000;
     e["heading_sigma_deg"] = std::round(s.heading_sigma_deg * 10) / 10;

@@ -15,6 +15,8 @@
 #include <cstring>
 #include <vector>
 
+#include "mocap/core/thread_priority.hpp"
+
 namespace mocap::daemon {
 
 /// One connected client: a byte ring holding whole queued lines.
@@ -182,6 +184,8 @@ bool PoseJsonServer::flush(Client& c) {
 }
 
 void PoseJsonServer::run() {
+  // Not granted: the pipeline thread has already warned with the same reason.
+  (void)set_this_thread_realtime(options_.realtime_priority, nullptr);
   const std::size_t max_fds = static_cast<std::size_t>(options_.max_clients) + 2;
   std::vector<pollfd> fds(max_fds);  // allocated once for the thread's life
   while (!stop_.load()) {

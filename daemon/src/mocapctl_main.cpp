@@ -41,8 +41,10 @@ void print_status_table(const nlohmann::json& j) {
                 s.value("age_ms", 0.0), static_cast<unsigned long long>(s.value("drops", 0ull)),
                 static_cast<unsigned long long>(s.value("errors", 0ull)),
                 s.value("at_rest", false) ? "rest" : "-",
-                s.value("mag_disturbed", false) ? "dist" : "ok", s.value("gyro_bias_dps", 0.0),
-                s.value("heading_sigma_deg", 0.0));
+                s.value("mag_disturbed", false)      ? "dist"
+                : s.value("mag_no_reference", false) ? "noref"
+                                                     : "ok",
+                s.value("gyro_bias_dps", 0.0), s.value("heading_sigma_deg", 0.0));
   }
 }
 

@@ -22,8 +22,9 @@ class PostureSink final : public FrameSink {
 
 class JsonSink final : public FrameSink {
  public:
-  JsonSink(const JsonOutputConfig& c, Logger& log) {
+  JsonSink(const JsonOutputConfig& c, int realtime_priority, Logger& log) {
     PoseJsonServer::Options o;
+    o.realtime_priority = realtime_priority;
     o.bind_address = c.bind;
     o.port = static_cast<uint16_t>(c.port);
     o.max_clients = c.max_clients;
@@ -67,7 +68,9 @@ std::vector<std::unique_ptr<FrameSink>> make_outputs(const Config& cfg, Logger& 
     }
     log.info("shared posture %s", name.c_str());
   }
-  if (cfg.outputs.json.enabled) out.push_back(std::make_unique<JsonSink>(cfg.outputs.json, log));
+  if (cfg.outputs.json.enabled)
+    out.push_back(
+        std::make_unique<JsonSink>(cfg.outputs.json, cfg.pipeline.realtime_priority, log));
   if (cfg.outputs.vmc.enabled) out.push_back(std::make_unique<VmcSink>(cfg.outputs.vmc, log));
   return out;
 }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mocap/core/thread_priority.hpp"
 #include "mocap/core/time.hpp"
 
 namespace mocap::daemon {
@@ -220,6 +221,9 @@ void Pipeline::run() {
   sigset_t all;
   sigfillset(&all);
   pthread_sigmask(SIG_BLOCK, &all, nullptr);
+  std::string rt_error;
+  if (!set_this_thread_realtime(cfg_.realtime_priority, &rt_error))
+    log_.warn("%s", rt_error.c_str());
   const int64_t period = static_cast<int64_t>(std::llround(1e9 / cfg_.rate_hz));
   int64_t next_frame = monotonic_ns() + period;
   while (running_.load(std::memory_order_relaxed)) {

@@ -147,6 +147,7 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
     const SensorFilterState fs = engine_.sensor_state(static_cast<int>(i));
     st.flags = static_cast<uint16_t>((fs.at_rest ? uint32_t{kSegAtRest} : 0u) |
                                      (fs.mag_disturbed ? uint32_t{kSegMagDisturbed} : 0u) |
+                                     (fs.mag_no_reference ? uint32_t{kSegMagNoReference} : 0u) |
                                      (h.live ? 0u : uint32_t{kSegStale}));
     st.gyro_bias_dps = static_cast<float>(fs.gyro_bias_rad_s * 180.0 / M_PI);
     st.heading_sigma_deg = static_cast<float>(fs.heading_sigma_rad * 180.0 / M_PI);

@@ -85,7 +85,8 @@ void RigEngine::on_sample(int i, const ImuSample& s) {
   if (seg < 0) return;
   const Eigen::Quaterniond q = cfg_.filter.use_mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();
   const uint32_t flags = (f.at_rest() ? uint32_t{kSegAtRest} : 0u) |
-                         (f.mag_disturbed() ? uint32_t{kSegMagDisturbed} : 0u);
+                         (f.mag_disturbed() ? uint32_t{kSegMagDisturbed} : 0u) |
+                         (f.mag_no_reference() ? uint32_t{kSegMagNoReference} : 0u);
   skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags);
   if (calibrator_.capturing()) {
     calibrator_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
@@ -132,6 +133,7 @@ SensorFilterState RigEngine::sensor_state(int i) const {
   st.initialised = f.counters().gyr_ok > 0;
   st.at_rest = f.at_rest();
   st.mag_disturbed = f.mag_disturbed();
+  st.mag_no_reference = cfg_.filter.use_mag && f.mag_no_reference();
   st.gyro_bias_rad_s = f.gyro_bias_rad_s().norm();
   st.heading_sigma_rad = cfg_.filter.use_mag ? f.heading_sigma_rad() : 0.0;
   const int seg = segment_of_[i];

@@ -3,6 +3,7 @@
 
 #include <array>
 
+#include "mocap/core/thread_priority.hpp"
 #include "mocap/core/time.hpp"
 
 namespace mocap {
@@ -137,6 +138,9 @@ int StreamDevice::step_poll(SampleSink& sink) {
 }
 
 void StreamDevice::run(SampleSink& sink) {
+  std::string rt_error;
+  if (!set_this_thread_realtime(spec_.realtime_priority, &rt_error))
+    log_.debug("%s: %s", spec_.name.c_str(), rt_error.c_str());  // the pipeline warns once
   std::array<uint8_t, 4096> buf{};
   while (!stop_) {
     if (!transport_ && !try_open(sink)) {

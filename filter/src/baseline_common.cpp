@@ -34,6 +34,17 @@ bool BaselineInput::take(const ImuSample& s, Eigen::Vector3d& gyr, double& dt_s)
   return true;
 }
 
+bool BaselineInput::next(const ImuSample& s, bool use_mag, Eigen::Quaterniond& q_nwu,
+                         Eigen::Vector3d& gyr, double& dt_s) {
+  if (!take(s, gyr, dt_s)) return false;
+  if (initialised) return true;
+  if (have_acc) {
+    q_nwu = initial_nwu(acc, use_mag && have_mag ? &mag : nullptr);
+    initialised = true;
+  }
+  return false;
+}
+
 Eigen::Quaterniond initial_nwu(const Eigen::Vector3d& acc, const Eigen::Vector3d* mag) {
   const Eigen::Vector3d z = acc.normalized();  // up, in sensor coordinates
   Eigen::Vector3d x;                           // north, in sensor coordinates

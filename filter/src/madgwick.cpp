@@ -9,14 +9,7 @@ namespace mocap {
 void MadgwickFilter::update(const ImuSample& s) {
   Eigen::Vector3d gyr;
   double dt_s = 0;
-  if (!in_.take(s, gyr, dt_s)) return;
-  if (!in_.initialised) {
-    if (!in_.have_acc) return;
-    q_nwu_ = filt::initial_nwu(in_.acc, p_.use_mag && in_.have_mag ? &in_.mag : nullptr);
-    in_.initialised = true;
-    return;
-  }
-  step(gyr, dt_s);
+  if (in_.next(s, p_.use_mag, q_nwu_, gyr, dt_s)) step(gyr, dt_s);
 }
 
 void MadgwickFilter::step(const Eigen::Vector3d& gyr, double dt_s) {

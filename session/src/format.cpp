@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 namespace mocap::session {
 namespace {
@@ -24,6 +25,22 @@ struct Put {
   void bytes(const void* d, std::size_t n) {
     if (n) std::memcpy(p, d, n);
     p += n;
+  }
+  /// Writes v in the width of its type (the same call shape as Get::field).
+  template <typename T>
+  void field(const T& v) {
+    if constexpr (std::is_same_v<T, double>)
+      f64(v);
+    else if constexpr (std::is_same_v<T, float>)
+      f32(v);
+    else if constexpr (sizeof(T) == 1)
+      u8(static_cast<uint8_t>(v));
+    else if constexpr (sizeof(T) == 2)
+      u16(static_cast<uint16_t>(v));
+    else if constexpr (sizeof(T) == 4)
+      u32(static_cast<uint32_t>(v));
+    else
+      u64(static_cast<uint64_t>(v));
   }
 };
 
@@ -55,6 +72,22 @@ struct Get {
   int64_t i64() { return static_cast<int64_t>(u64()); }
   float f32() { return std::bit_cast<float>(u32()); }
   double f64() { return std::bit_cast<double>(u64()); }
+  /// Reads v in the width of its type (the same call shape as Put::field).
+  template <typename T>
+  void field(T& v) {
+    if constexpr (std::is_same_v<T, double>)
+      v = f64();
+    else if constexpr (std::is_same_v<T, float>)
+      v = f32();
+    else if constexpr (sizeof(T) == 1)
+      v = static_cast<T>(u8());
+    else if constexpr (sizeof(T) == 2)
+      v = static_cast<T>(u16());
+    else if constexpr (sizeof(T) == 4)
+      v = static_cast<T>(u32());
+    else
+      v = static_cast<T>(u64());
+  }
   bool str(std::string& s, std::size_t n) {
     if (!need(n)) return false;
     s.assign(reinterpret_cast<const char*>(p), n);
@@ -67,6 +100,56 @@ bool finite_all(const float* v, int n) {
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(v[i])) return false;
   return true;
+}
+
+// One field list per record, walked by Put (encode, const record) and Get (decode): the layout
+// is written once. docs/session-format.md gives the same order.
+
+template <typename IO, typename Sample>
+void sample_fields(IO& io, Sample& s) {
+  io.field(s.t_host_ns);
+  io.field(s.t_device_ns);
+  io.field(s.seq);
+  io.field(s.sensor_id);
+  io.field(s.valid);
+  io.field(s.flags);
+  for (int i = 0; i < 3; ++i)
+    io.field(s.gyr_rad_s[i]);
+  for (int i = 0; i < 3; ++i)
+    io.field(s.acc_m_s2[i]);
+  for (int i = 0; i < 3; ++i)
+    io.field(s.mag_uT[i]);
+  io.field(s.q_device_sensor.w());
+  io.field(s.q_device_sensor.x());
+  io.field(s.q_device_sensor.y());
+  io.field(s.q_device_sensor.z());
+}
+
+/// Segment s of a pose: orientation, position, joint rotation, violation, flags.
+template <typename IO, typename Frame>
+void segment_fields(IO& io, Frame& f, int s) {
+  for (auto& v : f.q_earth_segment[s])
+    io.field(v);
+  for (auto& v : f.p_earth_segment_m[s])
+    io.field(v);
+  for (auto& v : f.q_parent_segment[s])
+    io.field(v);
+  io.field(f.joint_violation_deg[s]);
+  io.field(f.segment_flags[s]);
+}
+
+/// A sensor status after its name bytes.
+template <typename IO, typename Status>
+void sensor_status_fields(IO& io, Status& st) {
+  io.field(st.segment);
+  io.field(st.state);
+  io.field(st.flags);
+  io.field(st.rate_hz);
+  io.field(st.last_age_ms);
+  io.field(st.drops);
+  io.field(st.errors);
+  io.field(st.gyro_bias_dps);
+  io.field(st.heading_sigma_deg);
 }
 
 }  // namespace
@@ -149,41 +232,13 @@ bool decode_header_payload(std::span<const uint8_t> payload, SessionHeader& h, s
 
 void encode_sample(const ImuSample& s, uint8_t* out) noexcept {
   Put w{out};
-  w.i64(s.t_host_ns);
-  w.i64(s.t_device_ns);
-  w.u32(s.seq);
-  w.u16(s.sensor_id);
-  w.u8(s.valid);
-  w.u8(s.flags);
-  for (int i = 0; i < 3; ++i)
-    w.f64(s.gyr_rad_s[i]);
-  for (int i = 0; i < 3; ++i)
-    w.f64(s.acc_m_s2[i]);
-  for (int i = 0; i < 3; ++i)
-    w.f64(s.mag_uT[i]);
-  w.f64(s.q_device_sensor.w());
-  w.f64(s.q_device_sensor.x());
-  w.f64(s.q_device_sensor.y());
-  w.f64(s.q_device_sensor.z());
+  sample_fields(w, s);
 }
 
 bool decode_sample(std::span<const uint8_t> payload, ImuSample& s) noexcept {
   if (payload.size() != kSamplePayloadBytes) return false;
   Get r{payload.data(), payload.data() + payload.size()};
-  s.t_host_ns = r.i64();
-  s.t_device_ns = r.i64();
-  s.seq = r.u32();
-  s.sensor_id = r.u16();
-  s.valid = r.u8();
-  s.flags = r.u8();
-  for (int i = 0; i < 3; ++i)
-    s.gyr_rad_s[i] = r.f64();
-  for (int i = 0; i < 3; ++i)
-    s.acc_m_s2[i] = r.f64();
-  for (int i = 0; i < 3; ++i)
-    s.mag_uT[i] = r.f64();
-  const double w = r.f64(), x = r.f64(), y = r.f64(), z = r.f64();
-  s.q_device_sensor = Eigen::Quaterniond(w, x, y, z);
+  sample_fields(r, s);
   return r.ok && s.gyr_rad_s.allFinite() && s.acc_m_s2.allFinite() && s.mag_uT.allFinite() &&
          s.q_device_sensor.coeffs().allFinite();
 }
@@ -197,28 +252,12 @@ std::size_t encode_pose(const PoseFrame& f, uint8_t* out) noexcept {
   w.u32(n);
   w.f32(f.calib_countdown_s);
   w.f32(0);  // reserved
-  for (int s = 0; s < kSegmentCount; ++s) {
-    for (float v : f.q_earth_segment[s])
-      w.f32(v);
-    for (float v : f.p_earth_segment_m[s])
-      w.f32(v);
-    for (float v : f.q_parent_segment[s])
-      w.f32(v);
-    w.f32(f.joint_violation_deg[s]);
-    w.u32(f.segment_flags[s]);
-  }
+  for (int s = 0; s < kSegmentCount; ++s)
+    segment_fields(w, f, s);
   for (uint32_t i = 0; i < n; ++i) {
     const SensorStatus& st = f.sensors[i];
     w.bytes(st.name, sizeof st.name);
-    w.u8(static_cast<uint8_t>(st.segment));
-    w.u8(st.state);
-    w.u16(st.flags);
-    w.f32(st.rate_hz);
-    w.f32(st.last_age_ms);
-    w.u32(st.drops);
-    w.u32(st.errors);
-    w.f32(st.gyro_bias_dps);
-    w.f32(st.heading_sigma_deg);
+    sensor_status_fields(w, st);
   }
   return static_cast<std::size_t>(w.p - out);
 }
@@ -237,14 +276,7 @@ bool decode_pose(std::span<const uint8_t> payload, PoseFrame& f) noexcept {
   f.calib_countdown_s = r.f32();
   r.f32();  // reserved
   for (int s = 0; s < kSegmentCount; ++s) {
-    for (float& v : f.q_earth_segment[s])
-      v = r.f32();
-    for (float& v : f.p_earth_segment_m[s])
-      v = r.f32();
-    for (float& v : f.q_parent_segment[s])
-      v = r.f32();
-    f.joint_violation_deg[s] = r.f32();
-    f.segment_flags[s] = r.u32();
+    segment_fields(r, f, s);
     if (!finite_all(f.q_earth_segment[s].data(), 4) ||
         !finite_all(f.p_earth_segment_m[s].data(), 3) ||
         !finite_all(f.q_parent_segment[s].data(), 4) || !std::isfinite(f.joint_violation_deg[s]))
@@ -256,15 +288,7 @@ bool decode_pose(std::span<const uint8_t> payload, PoseFrame& f) noexcept {
     std::memcpy(st.name, r.p, sizeof st.name);
     st.name[sizeof st.name - 1] = '\0';
     r.p += sizeof st.name;
-    st.segment = static_cast<int8_t>(r.u8());
-    st.state = r.u8();
-    st.flags = r.u16();
-    st.rate_hz = r.f32();
-    st.last_age_ms = r.f32();
-    st.drops = r.u32();
-    st.errors = r.u32();
-    st.gyro_bias_dps = r.f32();
-    st.heading_sigma_deg = r.f32();
+    sensor_status_fields(r, st);
   }
   return r.ok && std::isfinite(f.calib_countdown_s);
 }

@@ -52,7 +52,7 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
   q_es_[segment] = Eigen::Quaterniond(q.coeffs() / n);
   t_in_ns_[segment] = t_ns;
   have_[segment] = true;
-  in_flags_[segment] = sensor_flags & (kSegAtRest | kSegMagDisturbed);
+  in_flags_[segment] = sensor_flags & (kSegAtRest | kSegMagDisturbed | kSegMagNoReference);
   if (t_ns > t_newest_ns_) t_newest_ns_ = t_ns;
 }
 

@@ -101,12 +101,15 @@ TEST(Config, UnknownSectionAndSegmentSuggestions) {
 TEST(Config, RangeAndTypeChecks) {
   ConfigErrors errs;
   auto c = parse(
-      "[pipeline]\nrate_hz = 0\nstale_after_ms = \"x\"\n[outputs.json]\nport = 70000\n"
+      "[pipeline]\nrate_hz = 0\nstale_after_ms = \"x\"\nrealtime_priority = 80\n"
+      "[outputs.json]\nport = 70000\n"
       "bind = \"localhost:1\"\n",
       errs);
   ASSERT_FALSE(c);
   std::string all = errs.to_string();
-  EXPECT_EQ(errs.errors.size(), 4u) << all;
+  EXPECT_EQ(errs.errors.size(), 5u) << all;
+  EXPECT_NE(all.find("pipeline.realtime_priority: 80 is out of range [0, 49]"), std::string::npos)
+      << all;
   EXPECT_NE(all.find("pipeline.rate_hz: 0 is out of range"), std::string::npos) << all;
   EXPECT_NE(all.find("pipeline.stale_after_ms: expected a number"), std::string::npos) << all;
   EXPECT_NE(all.find("outputs.json.port: 70000 is out of range"), std::string::npos) << all;

@@ -62,7 +62,9 @@ void sensor_table(TextRenderer& t, const PoseFrame& f, float x, float y) {
     std::snprintf(line, sizeof line, "%-6.6s %-11.11s %-7s %4.0f %6.0f %4u %s%s", name, seg,
                   state_name(st.state), static_cast<double>(st.rate_hz),
                   static_cast<double>(st.last_age_ms), st.drops,
-                  (st.flags & kSegMagDisturbed) ? "MAG " : "",
+                  (st.flags & kSegMagDisturbed)     ? "MAG "
+                  : (st.flags & kSegMagNoReference) ? "MAG? "
+                                                    : "",
                   (st.flags & kSegAtRest) ? "REST" : "");
     t.text(x, y + lh * static_cast<float>(i + 1), scale, line, state_colour(st));
   }

@@ -65,6 +65,9 @@ struct PipelineConfig {
   double rate_hz = 120.0;             ///< pose frame rate
   bool publish_every_sample = false;  ///< also publish a frame on every sample (low latency)
   double stale_after_ms = 250.0;      ///< a sensor silent this long degrades its segment
+  /// SCHED_FIFO priority (1..49) of the device readers, the pipeline and the pose stream; 0 =
+  /// normal scheduling. Keeps the latency low on a busy machine (needs CAP_SYS_NICE/LimitRTPRIO).
+  int realtime_priority = 0;
 };
 
 struct JsonOutputConfig {

@@ -33,6 +33,7 @@ class PoseJsonServer {
     int max_clients = 32;                          ///< further connections are closed at once
     std::size_t client_buffer_bytes = 256 * 1024;  ///< per-client queue of whole lines
     std::size_t max_client_input_bytes = 4096;     ///< a client sending more is dropped
+    int realtime_priority = 0;  ///< SCHED_FIFO priority of the I/O thread (0 = normal)
   };
   struct Stats {
     uint64_t frames_published = 0;   ///< frames handed to the I/O thread

@@ -20,8 +20,9 @@ struct SensorFilterState {
   bool initialised = false;  ///< the filter has an orientation
   bool at_rest = false;
   bool mag_disturbed = false;
-  bool calibrated = false;     ///< a sensor-to-segment calibration is applied
-  double gyro_bias_rad_s = 0;  ///< norm of the bias estimate
+  bool mag_no_reference = false;  ///< 9-D heading still provisional (no reference field yet)
+  bool calibrated = false;        ///< a sensor-to-segment calibration is applied
+  double gyro_bias_rad_s = 0;     ///< norm of the bias estimate
   double heading_sigma_rad = 0;
 };
 

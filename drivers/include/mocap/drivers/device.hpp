@@ -47,6 +47,9 @@ struct DeviceSpec {
   /// Written like "x,y,z" (identity) or "-y,x,z".
   std::string axis_remap = "x,y,z";
   std::map<std::string, std::string> options;  ///< protocol-specific (e.g. "quat_order")
+  /// SCHED_FIFO priority of the reader thread (0 = normal scheduling); see
+  /// mocap/core/thread_priority.hpp. Not granted: a warning, and the device runs anyway.
+  int realtime_priority = 0;
 };
 
 /// Counters every decoder and device keeps (monotonic, never reset while running).

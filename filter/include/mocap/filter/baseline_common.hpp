@@ -25,6 +25,10 @@ struct BaselineInput {
 
   /// Stores acc/mag of s; for a valid gyro sample returns true with dt_s (0 on the first).
   bool take(const ImuSample& s, Eigen::Vector3d& gyr, double& dt_s);
+  /// take(), then sets q_nwu from the first acc (and mag if use_mag) once; true when a filter
+  /// step is due with gyr and dt_s.
+  bool next(const ImuSample& s, bool use_mag, Eigen::Quaterniond& q_nwu, Eigen::Vector3d& gyr,
+            double& dt_s);
 };
 
 /// Orientation sensor -> North-West-Up from one acc and (optionally) one mag vector.

@@ -23,6 +23,9 @@ enum SegmentFlag : uint32_t {
   kSegClamped = 1u << 5,        ///< its joint was clamped to the nearest allowed pose
   kSegAtRest = 1u << 6,         ///< its sensor is at rest
   kSegStance = 1u << 7,         ///< foot segments: this foot is the stance foot
+  /// Its sensor's filter has not accepted a reference field yet (start-up): the heading follows
+  /// the magnetometer provisionally. Not the same as kSegMagDisturbed (field rejected).
+  kSegMagNoReference = 1u << 8,
 };
 
 /// Whole-frame state bits (PoseFrame::flags).

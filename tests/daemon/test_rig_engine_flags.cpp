@@ -1,0 +1,64 @@
+// The magnetometer states a frame reports per segment and sensor: during the filters' start-up
+// every tracked segment says "no reference field yet" (kSegMagNoReference), not "disturbed";
+// once the standing, then walking, virtual performer has given each filter a consistent field,
+// no segment says either. The performer's samples go through the real RigEngine.
+#include <gtest/gtest.h>
+
+#include "mocap/daemon/config.hpp"
+#include "mocap/daemon/rig_engine.hpp"
+#include "mocap/sim/performer.hpp"
+
+namespace mocap::daemon {
+namespace {
+
+TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
+  ConfigErrors errs;
+  std::optional<Config> cfg = parse_config("", "<defaults>", {}, errs);
+  ASSERT_TRUE(cfg) << errs.to_string();
+  for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
+    SensorConfig s;
+    s.name = std::string(sim::Performer::sensor_name(i));
+    s.segment = s.name;
+    s.driver = "direct";
+    cfg->sensors.push_back(s);
+  }
+  sim::PerformerParams pp;
+  pp.motion = "walk";
+  sim::Performer perf(pp);
+  RigEngine engine(*cfg);
+  PoseFrame frame;
+  std::vector<ImuSample> samples;
+  auto count = [&](uint32_t bit) {
+    int n = 0;
+    for (int s = 0; s < kSegmentCount; ++s)
+      if ((frame.segment_flags[s] & kSegTracked) && (frame.segment_flags[s] & bit)) ++n;
+    return n;
+  };
+  int tracked = 0, no_ref_early = -1, disturbed_early = -1;
+  for (int k = 1; k <= 3000; ++k) {  // 30 s at 100 Hz
+    const int64_t t_ns = static_cast<int64_t>(k) * 10'000'000;
+    samples.clear();
+    perf.step_to(t_ns, samples);
+    for (const ImuSample& s : samples)
+      engine.on_sample(s.sensor_id, s);
+    if (k % 10 != 0) continue;
+    engine.build_frame(t_ns, frame);
+    if (k == 50) {  // 0.5 s: every filter is still in its start-up
+      tracked = count(kSegTracked);
+      no_ref_early = count(kSegMagNoReference);
+      disturbed_early = count(kSegMagDisturbed);
+      for (int i = 0; i < sim::Performer::kSensorCount; ++i)
+        EXPECT_TRUE(engine.sensor_state(i).mag_no_reference) << i;
+    }
+  }
+  EXPECT_EQ(tracked, sim::Performer::kSensorCount);
+  EXPECT_EQ(no_ref_early, tracked);
+  EXPECT_EQ(disturbed_early, 0);
+  EXPECT_EQ(count(kSegMagNoReference), 0);
+  EXPECT_EQ(count(kSegMagDisturbed), 0);
+  for (int i = 0; i < sim::Performer::kSensorCount; ++i)
+    EXPECT_FALSE(engine.sensor_state(i).mag_no_reference) << i;
+}
+
+}  // namespace
+}  // namespace mocap::daemon
