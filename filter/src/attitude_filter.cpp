@@ -533,9 +533,14 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   if (p_.mag_dist_rejection) {
     if (!st_.mag_have_ref) {
       // Provisional heading: follows the field only while it stays consistent with the
-      // candidate reference (a field whose norm or dip changes is no earth field).
+      // candidate reference (a field whose norm or dip changes is no earth field); the very
+      // first sample sets it, so there is a heading from the start.
       use_init = false;
-      if (st_.mag_cand_age_s < p_.mag_min_undisturbed_time_s) k = 0;
+      if (!st_.mag_heading_set)
+        k = 1;
+      else if (st_.mag_cand_age_s < p_.mag_min_undisturbed_time_s)
+        k = 0;
+      st_.mag_heading_set = true;
     } else if (st_.mag_disturbed) {
       use_init = false;
       if (st_.mag_reject_t_s <= p_.mag_max_rejection_time_s) {

@@ -20,7 +20,7 @@ double heading_err_deg(const Eigen::Quaterniond& est, const Eigen::Quaterniond& 
   return std::abs(std::atan2(x.y(), x.x())) / kDeg;
 }
 
-TEST(AttitudeStartup, NoReferenceFlagIsSeparateFromDisturbed) {
+TEST(AttitudeStartup, NoReferenceFlagMarksStartupApartFromDisturbance) {
   SynthConfig c;
   c.q0 = start_attitude();
   c.duration_s = 50;

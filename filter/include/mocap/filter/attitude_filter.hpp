@@ -104,7 +104,7 @@ struct FilterParams {
   double hard_iron_min_sigmas = 3.0;    ///< smallest significance applied, sigmas
   double hard_iron_nis_tau_s = 2.0;     ///< averaging of the innovation consistency
   double hard_iron_nis_max = 9.0;       ///< above: model broken, b uncertain again
-  double hard_iron_step_s = 0.04;       ///< estimator period (decimated)
+  double hard_iron_step_s = 0.1;        ///< estimator period (decimated)
   /// The offset is applied only while it explains a disturbance: the field's norm/dip
   /// deviation from the reference (squared, relative to the thresholds, as the soft trust)
   /// is compared with and without it, the difference low-passed over hard_iron_select_tau_s;
@@ -208,7 +208,8 @@ struct FilterState {
   Eigen::Vector3d rest_last_gyr_lp = Eigen::Vector3d::Zero();
   // magnetometer
   bool mag_disturbed = true;
-  bool mag_have_ref = false;  ///< a reference field was accepted (start-up is over)
+  bool mag_have_ref = false;     ///< a reference field was accepted (start-up is over)
+  bool mag_heading_set = false;  ///< the first field sample set the provisional heading
   double k_mag_init = 1.0;
   double mag_ref_norm = 0, mag_ref_dip = 0;
   double mag_undisturbed_t_s = 0, mag_reject_t_s = 0;
@@ -238,7 +239,8 @@ struct FilterOutput {
   /// field does not match it); the heading runs on the gyro.
   bool mag_disturbed = false;
   /// No reference field accepted yet (start-up): the heading follows the field
-  /// provisionally and must not be trusted; distinct from mag_disturbed.
+  /// provisionally (while it is self-consistent) and must not be trusted yet; distinct from
+  /// mag_disturbed (never both).
   bool mag_no_reference = false;
   Eigen::Vector3d hard_iron_uT = Eigen::Vector3d::Zero();  ///< offset subtracted (sensor frame)
   double hard_iron_sigma_uT = 0;  ///< its largest one-sigma (directions above the gate unused)
@@ -258,7 +260,8 @@ class AttitudeFilter {
   /// 6D orientation (sensor -> a z-up frame with arbitrary but slowly drifting heading).
   Eigen::Quaterniond q_earth_sensor_6d() const;
   bool at_rest() const { return st_.rest; }
-  /// Field currently rejected (a reference field exists and this one fails its tests).
+  /// Field currently rejected: a reference field exists and this one fails its tests (the
+  /// heading runs on the gyro). False during start-up, see mag_no_reference().
   bool mag_disturbed() const {
     return st_.have_mag && st_.mag_have_ref && p_.mag_dist_rejection && st_.mag_disturbed;
   }
