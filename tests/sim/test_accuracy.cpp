@@ -17,7 +17,7 @@ namespace mocap::sim {
 namespace {
 
 TEST(Accuracy, WalkJointAnglesAndRootDrift) {
-  // Targets met on every seed 1..5 for the joints (worst 1.67 / 2.29 deg); drift 2.2-5.2 %.
+  // Targets met on every seed 1..5 for the joints (worst 1.68 / 2.30 deg); drift 2.2-5.2 %.
   for (uint64_t seed : {1, 3}) {
     AccuracyOptions o;
     o.motion = "walk";
@@ -27,7 +27,7 @@ TEST(Accuracy, WalkJointAnglesAndRootDrift) {
     record(r);
     EXPECT_GT(r.distance_walked_m, 5.0);
     EXPECT_LE(r.root_drift_fraction, 0.05) << seed;  // target (measured 2.2 %, 2.7 %)
-    // Targets, met: measured 1.28 / 1.39 deg (seed 1), 1.37 / 2.16 (seed 3).
+    // Targets, met: measured 1.27 / 1.39 deg (seed 1), 1.37 / 2.09 (seed 3).
     EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << seed;
     EXPECT_LE(r.three_dof_max_rmse_deg, 3.0) << seed;
     // The knees identified their axes during the walk.
@@ -64,8 +64,8 @@ TEST(Accuracy, SquatAfterCalibrationMoves) {
     ASSERT_TRUE(r.calibrated) << r.calibration_message;
     record(r);
     EXPECT_EQ(r.hinges_identified, 4);
-    // Targets, met: measured 0.87 / 2.05 deg (seed 1), 0.70 / 2.12 (seed 2); seeds 1..5 at
-    // most 1.93 / 3.03 (3-DOF missed by seed 4, docs/accuracy.md).
+    // Targets, met: measured 0.87 / 2.06 deg (seed 1), 0.70 / 2.07 (seed 2); seeds 1..5 at
+    // most 1.92 / 3.002 (3-DOF missed by seed 4, docs/accuracy.md).
     EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << seed;
     EXPECT_LE(r.three_dof_max_rmse_deg, 3.0) << seed;
   }
@@ -80,7 +80,7 @@ TEST(Accuracy, ArmRaiseThroughNinetyDegreesWithRealisticSensors) {
   EXPECT_GT(r.frames, 1000);
   record(r);
   // Measured 2.68 / 2.30 deg (seed 1): 3-DOF meets its target for seed 1 (seeds 1..5: up to
-  // 4.65); the elbow misses (mounting yaw left by the elbow curls, docs/accuracy.md):
+  // 4.63); the elbow misses (mounting yaw left by the elbow curls, docs/accuracy.md):
   // regression guard only.
   EXPECT_LE(r.hinge_max_rmse_deg, 3.35);
   EXPECT_LE(r.three_dof_max_rmse_deg, 3.0);
@@ -97,13 +97,13 @@ TEST(Accuracy, IdealSensorsIsolateThePipeline) {
     o.motion = m;
     const AccuracyResult r = run_accuracy(o);
     ASSERT_TRUE(r.calibrated) << r.calibration_message;
-    EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << m;  // target (measured <= 0.83 / 1.92)
+    EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << m;  // target (measured <= 0.83 / 1.90)
     EXPECT_LE(r.three_dof_max_rmse_deg, 3.0) << m;
   }
 }
 
 TEST(Accuracy, MagnetAndDeskWalk) {
-  // The walk starts beside the magnet: measured 7.99 / 3.62 deg (seed 1; 15.5 worst hinge of
+  // The walk starts beside the magnet: measured 7.98 / 3.61 deg (seed 1; 15.5 worst hinge of
   // seeds 1..5 without the coupling), drift 8.0 %: missed, regression guards.
   AccuracyOptions o;
   o.motion = "walk";
@@ -118,8 +118,8 @@ TEST(Accuracy, MagnetAndDeskWalk) {
 
 TEST(Accuracy, MagnetAndDeskSquatAfterCalibrationMoves) {
   // Next to the magnet the N-pose takes the local field direction as a mounting yaw (20 deg on
-  // the right forearm); the calibration moves identify it at the elbow. Measured 1.68 / 5.95
-  // deg (seed 1): the hinge meets its target for seed 1 (seeds 1..5: up to 5.66), 3-DOF misses
+  // the right forearm); the calibration moves identify it at the elbow. Measured 1.90 / 5.94
+  // deg (seed 1): the hinge meets its target for seed 1 (seeds 1..5: up to 5.60), 3-DOF misses
   // (the hand beside the magnet): guard.
   AccuracyOptions o;
   o.motion = "squat";
