@@ -3,6 +3,7 @@
 #include <toml++/toml.h>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -147,10 +148,22 @@ Calibration parse_calibration(std::string_view text, std::string_view source) {
 }
 
 void save_calibration(const Calibration& c, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot write calibration");
-  out << serialize_calibration(c);
-  if (!out) throw std::runtime_error(path + ": write failed");
+  // Written beside the target and renamed over it, so a reader (the recorder reads the file
+  // while the daemon saves a refined calibration) sees the old or the new file, never half.
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw std::runtime_error(path + ": cannot write calibration");
+    out << serialize_calibration(c);
+    out.close();
+    if (!out) throw std::runtime_error(path + ": write failed");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw std::runtime_error(path + ": cannot replace calibration file");
+  }
 }
 
 Calibration load_calibration(const std::string& path) {

@@ -78,6 +78,8 @@ void Skeleton::reset_heading(const double* target_heading_deg) {
   calib_ =
       HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(), refiner_.common_yaw_rad());
   ++calib_revision_;
+  // The reset aligned every segment's heading: the coupling's offsets start again from it.
+  coupling_.reset();
 }
 
 void Skeleton::set_sensor_live(int segment, bool live) {

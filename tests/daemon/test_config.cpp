@@ -46,6 +46,17 @@ TEST(Config, EmptyFileGivesDefaults) {
   EXPECT_DOUBLE_EQ(c->pipeline.rate_hz, 120.0);
   EXPECT_EQ(c->outputs.json.bind, "127.0.0.1");
   EXPECT_TRUE(c->sensors.empty());
+  EXPECT_TRUE(c->calibration.refine_hinges);
+  EXPECT_TRUE(c->calibration.heading_coupling);
+}
+
+TEST(Config, HeadingCouplingCanBeTurnedOff) {
+  ConfigErrors errs;
+  auto c = parse("[calibration]\nheading_coupling = false\n", errs);
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_FALSE(c->calibration.heading_coupling);
+  auto bad = parse("[calibration]\nheading_coupling = 3\n", errs);
+  EXPECT_FALSE(bad);
 }
 
 TEST(Config, ReadsSensors) {

@@ -141,6 +141,10 @@ TEST(HeadingCoupling, SkeletonAppliesItToTheKnee) {
   EXPECT_NEAR(sk.heading_coupling().hinges()[1].offset_deg, 6.0, 0.2);
   EXPECT_LT(angle_between_deg(sk.q_parent_segment()[kShank], leg.thigh.conjugate() * leg.shank),
             0.3);
+  // A heading reset aligns every segment's heading: the coupling starts again from it.
+  sk.reset_heading();
+  EXPECT_EQ(sk.heading_coupling().hinges()[1].offset_deg, 0.0);
+  EXPECT_EQ(sk.heading_coupling().correction_rad()[kShank], 0.0);
 }
 
 }  // namespace heading_coupling_test

@@ -47,7 +47,7 @@ struct HeadingCouplingOptions {
   double min_flex_deg = 20;             ///< joint rotation below this: not observable
   double min_axis_horizontal = 0.5;     ///< |horizontal part| of both unit axes at least this
   double max_elevation_mismatch = 0.1;  ///< |a_parent.z - a_child.z| at most this
-  double max_correction_deg = 25;       ///< cap of each correction
+  double max_correction_deg = 25;       ///< cap of each hinge's offset estimate
   double max_residual_deg = 20;         ///< a measured offset is clamped to this per step
   double max_step_s = 0.1;              ///< longer gaps between updates count as this
   double disturbed_weight = 0.05;       ///< trust of a sensor flagged disturbed (clean: 1)
@@ -78,6 +78,10 @@ inline constexpr std::array<CouplingPair, 4> kCouplingPairs = {{
 /// The segment beyond each coupled child (shank -> foot, forearm -> hand), else -1.
 inline constexpr std::array<int8_t, kSegmentCount> kCouplingCarry = {
     -1, -1, -1, -1, -1, 6, -1, -1, 9, -1, -1, 12, -1, -1, 15, -1};
+static_assert(kCouplingCarry[index(Segment::forearm_l)] == index(Segment::hand_l) &&
+              kCouplingCarry[index(Segment::forearm_r)] == index(Segment::hand_r) &&
+              kCouplingCarry[index(Segment::shank_l)] == index(Segment::foot_l) &&
+              kCouplingCarry[index(Segment::shank_r)] == index(Segment::foot_r));
 
 class HeadingCoupling {
  public:
