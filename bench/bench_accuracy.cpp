@@ -149,7 +149,7 @@ int run_accuracy(int argc, char** argv) {
       .option("disturbance", "none|magnet|desk|both, comma list or 'all' (default none,both)")
       .option("seed", "random seed (default 1)")
       .option("rate", "sensor rate in Hz (default 100)")
-      .option("heading", "calibration heading source: pelvis|mean|truth (default pelvis)")
+      .option("heading", "calibration heading source: pelvis|normals|mean|truth (default pelvis)")
       .flag(
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
@@ -182,10 +182,17 @@ int run_accuracy(int argc, char** argv) {
   }
   base.seed = static_cast<uint64_t>(seed);
   const std::string heading = args.get_or("heading", "pelvis");
-  if (heading == "mean")
+  if (heading == "normals")
+    base.heading = HeadingSource::mount_normals;
+  else if (heading == "mean")
     base.heading = HeadingSource::mean_sensors;
   else if (heading == "truth")
     base.heading = HeadingSource::explicit_heading;
+  else if (heading != "pelvis") {
+    std::fprintf(stderr,
+                 "mocap bench accuracy: --heading must be normals, pelvis, mean or truth\n");
+    return 2;
+  }
   if (args.has("no-refine")) base.hinge_refine.enabled = false;
   const std::string coupling = args.get_or("coupling", "on");
   if (coupling != "on" && coupling != "off") {

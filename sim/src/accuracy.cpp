@@ -68,6 +68,11 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   copt.heading = o.heading;
   copt.explicit_heading_deg = o.explicit_heading_deg;
   copt.heading_axis_sensor = pelvis_forward_axis_sensor();
+  if (o.heading == HeadingSource::mount_normals) {
+    copt.heading_axis_sensor = Eigen::Vector3d::UnitZ();  // a strapped sensor's z: the normal
+    for (int s = 0; s < kSegmentCount; ++s)
+      copt.mount_normal_body[s] = mount_normal_segment(static_cast<Segment>(s));
+  }
   Calibrator calibrator(rig, copt);
   SkeletonOptions sopt;
   sopt.hinge_refine = o.hinge_refine;

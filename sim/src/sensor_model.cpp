@@ -54,62 +54,89 @@ std::vector<MagneticDipole> disturbance_preset(std::string_view name, double hei
                               "' (valid: none, magnet, desk, both)");
 }
 
+namespace {
+/// +1 for the left limbs' lateral sites (+y), -1 otherwise.
+double site_side(Segment seg) {
+  return (seg == Segment::upper_arm_l || seg == Segment::forearm_l || seg == Segment::hand_l ||
+          seg == Segment::thigh_l)
+             ? 1.0
+             : -1.0;
+}
+}  // namespace
+
+Eigen::Vector3d mount_normal_segment(Segment seg) {
+  using V = Eigen::Vector3d;
+  const double side = site_side(seg);
+  switch (seg) {
+    case Segment::pelvis:
+    case Segment::neck:
+      return -V::UnitX();
+    case Segment::torso:
+    case Segment::shank_l:
+    case Segment::shank_r:
+      return V::UnitX();
+    case Segment::upper_arm_l:
+    case Segment::upper_arm_r:
+    case Segment::forearm_l:
+    case Segment::forearm_r:
+    case Segment::hand_l:
+    case Segment::hand_r:
+      return side * V::UnitY();
+    case Segment::thigh_l:
+    case Segment::thigh_r:
+      return V(1, 0.4 * side, 0).normalized();
+    case Segment::head:
+    case Segment::foot_l:
+    case Segment::foot_r:
+      break;
+  }
+  return V::UnitZ();
+}
+
 SensorMount make_mount(Segment seg, const BodyDimensions& dims, const SensorModelParams& p,
                        std::mt19937_64& rng) {
   using V = Eigen::Vector3d;
   const double s = dims.height_m / 1.75;
   const V end = dims.end_offset_m[index(seg)];
-  const double side = (seg == Segment::upper_arm_l || seg == Segment::forearm_l ||
-                       seg == Segment::hand_l || seg == Segment::thigh_l)
-                          ? 1.0
-                          : -1.0;
-  V r = V::Zero(), normal = V::UnitZ();
+  const double side = site_side(seg);
+  V r = V::Zero();
+  const V normal = mount_normal_segment(seg);
   switch (seg) {
     case Segment::pelvis:
       r = V(-0.10 * s, 0, 0.05 * s);
-      normal = -V::UnitX();
       break;
     case Segment::torso:
       r = V(0.11 * s, 0, 0.6 * end.z());
-      normal = V::UnitX();
       break;
     case Segment::neck:
       r = V(-0.05 * s, 0, 0.5 * end.z());
-      normal = -V::UnitX();
       break;
     case Segment::head:
       r = V(0, 0, end.z() + 0.01 * s);
-      normal = V::UnitZ();
       break;
     case Segment::upper_arm_l:
     case Segment::upper_arm_r:
       r = V(0, side * 0.05 * s, 0.5 * end.z());
-      normal = side * V::UnitY();
       break;
     case Segment::forearm_l:
     case Segment::forearm_r:
       r = V(0, side * 0.035 * s, 0.7 * end.z());
-      normal = side * V::UnitY();
       break;
     case Segment::hand_l:
     case Segment::hand_r:
       r = V(0, side * 0.02 * s, 0.4 * end.z());
-      normal = side * V::UnitY();
       break;
     case Segment::thigh_l:
     case Segment::thigh_r:
       r = V(0.07 * s, side * 0.03 * s, 0.5 * end.z());
-      normal = V(1, 0.4 * side, 0).normalized();
       break;
     case Segment::shank_l:
     case Segment::shank_r:
       r = V(0.045 * s, 0, 0.4 * end.z());
-      normal = V::UnitX();
       break;
     case Segment::foot_l:
     case Segment::foot_r:
       r = V(0.5 * end.x(), 0, -0.01 * s);
-      normal = V::UnitZ();
       break;
   }
   // Sensor z along the outward normal, then the strap roll about it, then misalignment.

@@ -41,6 +41,8 @@ std::string_view to_string(HeadingSource h) {
       return "explicit_heading";
     case HeadingSource::arm_swing:
       return "arm_swing";
+    case HeadingSource::mount_normals:
+      return "mount_normals";
   }
   return "?";
 }
@@ -179,6 +181,44 @@ CalibrationResult Calibrator::finish() {
     case HeadingSource::explicit_heading:
       heading_rad = opt_.explicit_heading_deg * kDegToRad;
       break;
+    case HeadingSource::mount_normals: {
+      // Each horizontal normal gives one heading (weighted alike; near-vertical sites such as
+      // the head and feet do not count). Circular mean, then again over the sensors within
+      // kMaxNormalSpreadDeg of it: a sensor whose filter took a local field as north (a magnet
+      // near it) is off by far more than a strap's misalignment and must not pull the body.
+      constexpr double kMaxNormalSpreadDeg = 12.0;
+      std::array<double, kSegmentCount> h_site{};
+      std::array<bool, kSegmentCount> use{};
+      for (int i = 0; i < kSegmentCount; ++i) {
+        const Eigen::Vector3d& n_body = opt_.mount_normal_body[i];
+        const bool horizontal =
+            std::hypot(n_body.x(), n_body.y()) >= 0.5 * n_body.norm() && n_body.norm() > 0;
+        use[i] = rig_.tracked(i) && horizontal && forward_heading(mean[i], h_site[i]);
+        if (use[i]) h_site[i] -= std::atan2(n_body.y(), n_body.x());
+      }
+      const auto circular_mean = [&](double center_rad, double max_dev_rad, int& used) {
+        double sx = 0, sy = 0;
+        used = 0;
+        for (int i = 0; i < kSegmentCount; ++i) {
+          if (!use[i] || std::abs(std::remainder(h_site[i] - center_rad, 2 * M_PI)) > max_dev_rad)
+            continue;
+          sx += std::cos(h_site[i]);
+          sy += std::sin(h_site[i]);
+          ++used;
+        }
+        return std::atan2(sy, sx);
+      };
+      int used = 0;
+      heading_rad = circular_mean(0, 4 * M_PI, used);
+      if (used > 0) heading_rad = circular_mean(heading_rad, kMaxNormalSpreadDeg * kDegToRad, used);
+      if (used == 0) {
+        r.message =
+            "calibration refused: no sensor with a known horizontal mount normal agrees on the "
+            "heading";
+        return r;
+      }
+      break;
+    }
     case HeadingSource::arm_swing: {
       if (pose_ == CalibrationPose::npose) {
         npose_mean_ = mean;

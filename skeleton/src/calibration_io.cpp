@@ -105,7 +105,8 @@ Calibration parse_calibration(std::string_view text, std::string_view source) {
           std::optional<std::string_view> s = cv.value<std::string_view>();
           bool found = false;
           for (HeadingSource h : {HeadingSource::pelvis_sensor, HeadingSource::mean_sensors,
-                                  HeadingSource::explicit_heading, HeadingSource::arm_swing})
+                                  HeadingSource::explicit_heading, HeadingSource::arm_swing,
+                                  HeadingSource::mount_normals})
             if (s && *s == to_string(h)) {
               c.heading_source = h;
               found = true;

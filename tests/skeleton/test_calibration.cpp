@@ -102,6 +102,48 @@ TEST(Calibration, ArmSwingFindsHeadingWithEverySensorMountedArbitrarily) {
   EXPECT_LT(r.calibration.motion_deg, 0.5);
 }
 
+TEST(Calibration, MountNormalsAverageOutEachSensorsMisalignment) {
+  // Each sensor's z lies along its site's outward normal (any strap roll about it), turned by a
+  // misalignment of +-4 deg about the vertical; the pelvis alone would be 4 deg off. One sensor's
+  // filter took a local field as north (25 deg): left out of the mean.
+  std::mt19937 rng(3);
+  Rig rig(rng);
+  CalibratorOptions o;
+  o.heading = HeadingSource::mount_normals;
+  o.heading_axis_sensor = Eigen::Vector3d::UnitZ();
+  std::uniform_real_distribution<double> roll(-M_PI, M_PI);
+  int used = 0;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    const double az = 0.4 * s;  // a different horizontal normal per site
+    const Eigen::Vector3d n(std::cos(az), std::sin(az), s == index(Segment::head) ? 5.0 : 0.0);
+    o.mount_normal_body[s] = n;
+    const double mis_deg = (s % 2 ? 4.0 : -4.0) * (s == 0 ? -1 : 1);
+    const Eigen::Quaterniond q_segment_sensor =
+        yaw_rotation(mis_deg * kDegToRad) *
+        Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n) *
+        Eigen::Quaterniond(Eigen::AngleAxisd(roll(rng), Eigen::Vector3d::UnitZ()));
+    rig.q_sensor_segment[s] = q_segment_sensor.conjugate();
+    if (s != index(Segment::head)) ++used;
+  }
+  ASSERT_EQ(used % 2, 1);  // odd: the +-4 deg leave a residual of 4/used deg at most
+  rig.q_drift[index(Segment::hand_r)] = yaw_rotation(25 * kDegToRad);
+  Calibrator cal(RigMapping::full(), o);
+  capture(cal, rig, CalibrationPose::npose, 20 * kDegToRad, rng, 0, 0);
+  const auto r = cal.finish();
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_NEAR(r.calibration.heading_deg, 20, 0.6);
+  EXPECT_EQ(r.calibration.heading_source, HeadingSource::mount_normals);
+
+  // No site with a known horizontal normal: refused, saying why.
+  CalibratorOptions none = o;
+  none.mount_normal_body.fill(Eigen::Vector3d::Zero());
+  Calibrator cal2(RigMapping::full(), none);
+  capture(cal2, rig, CalibrationPose::npose, 20 * kDegToRad, rng, 0, 0);
+  const auto r2 = cal2.finish();
+  EXPECT_FALSE(r2.ok());
+  EXPECT_NE(r2.message.find("mount normal"), std::string::npos) << r2.message;
+}
+
 TEST(Calibration, WrongHeadingSourceGivesWrongMountings) {
   // Guard for the test above: with an arbitrarily mounted pelvis sensor, the pelvis heading is
   // wrong and so are the mountings (the error the arm-swing source removes).

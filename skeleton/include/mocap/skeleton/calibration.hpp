@@ -12,6 +12,11 @@
 //  - pelvis_sensor: the pelvis sensor's `heading_axis_sensor` points forward (default +x);
 //  - mean_sensors: the same axis of every sensor points forward (circular mean);
 //  - explicit_heading: the caller knows it (e.g. the person faces a marker);
+//  - mount_normals: every sensor lies flat on its segment, its `heading_axis_sensor` along the
+//    surface's outward normal, whose body-frame direction in the pose is known per segment
+//    (`mount_normal_body`; a strap's roll about it may be anything). The heading is the circular
+//    mean over the sensors with a horizontal normal: each sensor's misalignment and filter
+//    heading error count 1/N instead of the pelvis sensor's counting fully;
 //  - arm_swing: N-pose then T-pose; the arms' rotation axis is the body's forward axis. Works for
 //    any mounting of every sensor (needs sensors on both or either upper arm).
 #pragma once
@@ -28,7 +33,13 @@
 namespace mocap {
 
 enum class CalibrationPose : uint8_t { npose, tpose };
-enum class HeadingSource : uint8_t { pelvis_sensor, mean_sensors, explicit_heading, arm_swing };
+enum class HeadingSource : uint8_t {
+  pelvis_sensor,
+  mean_sensors,
+  explicit_heading,
+  arm_swing,
+  mount_normals
+};
 
 std::string_view to_string(CalibrationPose p);
 std::string_view to_string(HeadingSource h);
@@ -86,6 +97,9 @@ struct CalibratorOptions {
   HeadingSource heading = HeadingSource::pelvis_sensor;
   Eigen::Vector3d heading_axis_sensor = Eigen::Vector3d::UnitX();  ///< for pelvis/mean sources
   double explicit_heading_deg = 0;                                 ///< for explicit_heading
+  /// mount_normals: the outward normal of each segment's sensor site in the body frame (in the
+  /// calibration pose); zero = unknown (segment not used for the heading).
+  std::array<Eigen::Vector3d, kSegmentCount> mount_normal_body{};
 };
 
 enum class CalibrationStatus : uint8_t {
