@@ -35,6 +35,21 @@ TEST(Accuracy, WalkJointAnglesAndRootDrift) {
   }
 }
 
+TEST(Accuracy, MountNormalsHeadingRemovesThePelvisClipsYawFromTheShoulders) {
+  // The pelvis heading source turns every mounting by the belt clip's misalignment; the arm
+  // raise's shoulders show it (seed 1: 3-DOF 5.47 deg). The mean over the mount normals:
+  // 4.04 (docs/accuracy.md). 3-DOF target still missed: guard.
+  AccuracyOptions o;
+  o.motion = "arm_raise";
+  const AccuracyResult pelvis = run_accuracy(o);
+  o.heading = HeadingSource::mount_normals;
+  const AccuracyResult normals = run_accuracy(o);
+  ASSERT_TRUE(pelvis.calibrated && normals.calibrated) << normals.calibration_message;
+  record(normals);
+  EXPECT_LT(normals.three_dof_max_rmse_deg, pelvis.three_dof_max_rmse_deg - 1.0);
+  EXPECT_LE(normals.three_dof_max_rmse_deg, 5.0);
+}
+
 TEST(Accuracy, HingeRefinementRemovesTheCalibrationHeadingError) {
   // Without refinement the pelvis sensor's mount misalignment turns every joint axis (2.36 deg
   // knee); the refinement identifies each segment's mounting yaw from the knees (1.28 deg).
