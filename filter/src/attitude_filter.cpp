@@ -21,6 +21,11 @@ double wrap_pi(double a) {
   return a;
 }
 
+/// Dip of an earth-frame field of norm n (rad, positive when the field points down).
+double dip_rad(const Eigen::Vector3d& m_e, double n) {
+  return -std::asin(std::clamp(m_e.z() / n, -1.0, 1.0));
+}
+
 Eigen::Quaterniond heading_quat(double delta_rad) {
   return Eigen::Quaterniond(std::cos(delta_rad / 2), 0, 0, std::sin(delta_rad / 2));
 }
@@ -374,6 +379,13 @@ Eigen::Matrix3d AttitudeFilter::gyro_gain() const {
   return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(st_.gain.data());
 }
 
+double AttitudeFilter::field_deviation2(double norm, double dip, double ref_norm,
+                                        double ref_dip) const {
+  const double dn = (norm - ref_norm) / (p_.mag_norm_th * ref_norm);
+  const double dd = (dip - ref_dip) / (p_.mag_dip_th_deg * kDeg);
+  return dn * dn + dd * dd;
+}
+
 // Applies the gated offset only while it explains a disturbance: the squared norm/dip
 // deviations from the reference (relative to the thresholds) without and with it.
 void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
@@ -392,10 +404,7 @@ void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
   auto score = [&](const Eigen::Vector3d& m) {
     const double n = m.norm();
     if (!(n > 0)) return 0.0;
-    const double dip = -std::asin(std::clamp(m.z() / n, -1.0, 1.0));
-    const double dn = (n - st_.mag_ref_norm) / (p_.mag_norm_th * st_.mag_ref_norm);
-    const double dd = (dip - st_.mag_ref_dip) / (p_.mag_dip_th_deg * kDeg);
-    return std::min(dn * dn + dd * dd, 25.0);
+    return std::min(field_deviation2(n, dip_rad(m, n), st_.mag_ref_norm, st_.mag_ref_dip), 25.0);
   };
   st_.hi_select += c_.k_hard_iron_select * (score(m_raw_e) - score(m_corr_e) - st_.hi_select);
   st_.hi_weight = std::clamp(st_.hi_select / p_.hard_iron_select_margin, 0.0, 1.0);
@@ -434,7 +443,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
 
   if (p_.mag_dist_rejection) {
     const double n = m_e.norm();
-    const double nd[2] = {n, -std::asin(std::clamp(m_e.z() / n, -1.0, 1.0))};
+    const double nd[2] = {n, dip_rad(m_e, n)};
     const auto& f = st_.mag_norm_dip_lp.step(nd, c_.mag_norm_dip_lp, p_.mag_current_tau_s, ts);
     st_.mag_norm_dip[0] = f[0];
     st_.mag_norm_dip[1] = f[1];
@@ -512,9 +521,8 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     const bool ref = st_.mag_ref_norm > 0;
     const double rn = ref ? st_.mag_ref_norm : st_.mag_cand_norm;
     const double rd = ref ? st_.mag_ref_dip : st_.mag_cand_dip;
-    const double dn = (st_.mag_norm_dip[0] - rn) / (p_.mag_norm_th * rn);
-    const double dd = (st_.mag_norm_dip[1] - rd) / (p_.mag_dip_th_deg * kDeg);
-    double score = p_.mag_trust_weight * (dn * dn + dd * dd);
+    double score =
+        p_.mag_trust_weight * field_deviation2(st_.mag_norm_dip[0], st_.mag_norm_dip[1], rn, rd);
     if (p_.mag_consistency_th > 0)
       score += st_.mag_i_var_rel / (p_.mag_consistency_th * p_.mag_consistency_th);
     // A field that was rejected recently is trusted less until the rejection budget is repaid.

@@ -105,12 +105,13 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
     flags[i] = kSegTracked | in_flags_[i];
     if (t_now_ns - t_in_ns_[i] > opt_.stale_after_ns) flags[i] |= kSegStale;
   }
+  std::array<bool, kSegmentCount> fresh{};  // live and not stale: what the refiners may use
+  for (int i = 0; i < kSegmentCount; ++i)
+    fresh[i] = live[i] && !(flags[i] & kSegStale);
   // Hinge refinement: feed the fresh segments under the base calibration; re-apply its offsets.
   if (opt_.hinge_refine.enabled && calib_base_.valid) {
     std::array<Eigen::Quaterniond, kSegmentCount> q_base;
-    std::array<bool, kSegmentCount> fresh{};
     for (int i = 0; i < kSegmentCount; ++i) {
-      fresh[i] = live[i] && !(flags[i] & kSegStale);
       q_base[i] =
           fresh[i] ? calib_base_.segment_from_sensor(i, q_es_[i]) : Eigen::Quaterniond::Identity();
     }
@@ -125,11 +126,9 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
   }
   // Heading coupling at the hinges: measured on the calibrated orientations, applied on top.
   if (opt_.heading_coupling.enabled && calib_.valid) {
-    std::array<bool, kSegmentCount> fresh{}, disturbed{};
-    for (int i = 0; i < kSegmentCount; ++i) {
-      fresh[i] = live[i] && !(flags[i] & kSegStale);
+    std::array<bool, kSegmentCount> disturbed{};
+    for (int i = 0; i < kSegmentCount; ++i)
       disturbed[i] = (in_flags_[i] & kSegMagDisturbed) != 0;
-    }
     coupling_.update(q_earth_, fresh, disturbed, t_now_ns);
     for (int i = 0; i < kSegmentCount; ++i)
       if (live[i]) q_earth_[i] = coupling_.apply(i, q_earth_[i]);

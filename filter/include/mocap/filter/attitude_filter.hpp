@@ -293,6 +293,9 @@ class AttitudeFilter {
   void update_acc(const Eigen::Vector3d& acc, double dt_s);
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
   void select_hard_iron(const Eigen::Vector3d& m_raw_e, const Eigen::Vector3d& m_corr_e);
+  /// Squared deviation of a field (norm, dip) from a reference, in units of the disturbance
+  /// thresholds (mag_norm_th, mag_dip_th_deg).
+  double field_deviation2(double norm, double dip, double ref_norm, double ref_dip) const;
   void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
   void update_gain(const Eigen::Vector2d& residual, const Eigen::Matrix<double, 2, 9>& reg,
                    const Eigen::Matrix3d& r_lp);
