@@ -105,6 +105,12 @@ sim::SensorModelParams only_errors(const std::string& list, std::string& bad) {
       p.mag_noise_uT = d.mag_noise_uT;
       p.mag_hard_iron_sigma_uT = d.mag_hard_iron_sigma_uT;
       p.mag_scale_sigma = d.mag_scale_sigma;
+    } else if (g == "mag_hard_iron") {
+      p.mag_hard_iron_sigma_uT = d.mag_hard_iron_sigma_uT;
+    } else if (g == "mag_scale") {
+      p.mag_scale_sigma = d.mag_scale_sigma;
+    } else if (g == "mag_noise") {
+      p.mag_noise_uT = d.mag_noise_uT;
     } else if (g == "gyr") {
       p.gyr_noise_density_dps_rthz = d.gyr_noise_density_dps_rthz;
       p.gyr_bias_sigma_dps = d.gyr_bias_sigma_dps;
@@ -155,6 +161,8 @@ int run_accuracy(int argc, char** argv) {
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
       .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
+      .option("anchor",
+              "filter heading anchored at the calibration (experimental): on|off (default off)")
       .option("coupling-param",
               "HeadingCouplingOptions overrides, comma list of name=value "
               "(tau_s, min_flex_deg, min_axis_horizontal, "
@@ -163,7 +171,7 @@ int run_accuracy(int argc, char** argv) {
       .flag("no-refine", "N-pose calibration only (no hinge-motion refinement)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
-              "(error breakdown; default all)")
+              "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)")
       .flag("ideal", "ideal sensors (no noise, bias, misalignment): isolates the pipeline")
       .flag("markdown", "also print a markdown table on stderr");
   if (!args.parse(argc, argv, 1)) {
@@ -200,6 +208,12 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.heading_coupling.enabled = coupling == "on";
+  const std::string anchor = args.get_or("anchor", "off");
+  if (anchor != "on" && anchor != "off") {
+    std::fprintf(stderr, "mocap bench accuracy: --anchor must be on or off\n");
+    return 2;
+  }
+  base.anchor_heading = anchor == "on";
   for (const std::string& kv : expand(args.get_or("coupling-param", ""), {})) {
     if (kv.empty()) continue;
     const size_t eq = kv.find('=');

@@ -428,6 +428,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       st_.hi_n = 0;
       st_.hi_dt_s = 0;
       select_hard_iron(r6 * m_c, r6 * (m_c - st_.hard_iron.used_uT));
+      update_anchor();
     }
   }
   const Eigen::Vector3d mag = mag_raw - hard_iron_uT();
@@ -592,7 +593,42 @@ Eigen::Quaterniond AttitudeFilter::q_earth_sensor_6d() const {
 
 Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
   if (!st_.have_mag) return st_.q_acc * st_.q_gyr;
+  if (st_.anchor_set) return st_.q_anchor_heading * (st_.q_delta * (st_.q_acc * st_.q_gyr));
   return st_.q_delta * (st_.q_acc * st_.q_gyr);
+}
+
+void AttitudeFilter::anchor_heading() {
+  st_.anchor_set = true;
+  st_.q_anchor = st_.q_delta * (st_.q_acc * st_.q_gyr);
+  st_.anchor_offset_uT = hard_iron_uT();
+  st_.anchor_heading_rad = 0;
+  st_.q_anchor_heading = Eigen::Quaterniond::Identity();
+}
+
+void AttitudeFilter::clear_heading_anchor() {
+  st_.anchor_set = false;
+  st_.anchor_heading_rad = 0;
+  st_.q_anchor_heading = Eigen::Quaterniond::Identity();
+}
+
+// The offset learnt since the anchor, b_new - b_anchor, was still in the field when the
+// anchor was taken: there it added q_anchor (b_new - b_anchor) to the earth-frame field and
+// turned the heading by the change of atan2(m_x, m_y) (the heading measurement).
+void AttitudeFilter::update_anchor() {
+  if (!st_.anchor_set) return;
+  const double f = st_.mag_ref_norm > 0 ? st_.mag_ref_norm : st_.hard_iron.f_uT;
+  const double dip = st_.mag_ref_norm > 0 ? st_.mag_ref_dip : 0.0;
+  const double fh = f * std::cos(dip);
+  if (!(fh > 0)) return;
+  const Eigen::Vector3d db = hard_iron_uT() - st_.anchor_offset_uT;
+  // Only a residual-sized offset can have been present unnoticed at the anchor; a larger one
+  // (a magnet attached since, a field gradient taken as an offset) leaves c as it was.
+  if (db.norm() > p_.anchor_max_offset * f || mag_disturbed()) return;
+  const Eigen::Vector3d v = st_.q_anchor * db;
+  const double c = std::atan2(v.x(), fh + v.y());
+  if (!std::isfinite(c)) return;
+  st_.anchor_heading_rad = c;
+  st_.q_anchor_heading = heading_quat(c);
 }
 
 double AttitudeFilter::heading_sigma_rad() const {

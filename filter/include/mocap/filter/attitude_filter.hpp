@@ -116,6 +116,8 @@ struct FilterParams {
   /// field, as a heading angle) relative to heading_sigma_deg, squared and times this weight,
   /// adds to the heading's soft-trust score: the heading follows a corrected field more slowly.
   double hard_iron_trust_weight = 0.0;  // off: slower heading costs more (gyro drift) on BROAD
+  /// anchor_heading(): largest offset change (x F) taken as present at the anchor.
+  double anchor_max_offset = 0.08;
   // --- magnetometer latency (ours) ---
   /// A magnetometer often samples the motion later than the gyro (longer integration,
   /// internal filters): during fast rotation its heading then lags. The latency is
@@ -226,6 +228,12 @@ struct FilterState {
   double hi_dt_s = 0;    ///< and their time
   double hi_select = 0;  ///< low-passed score difference without / with the offset
   double hi_weight = 0;  ///< weight of the offset applied (0..1)
+  // heading anchor (anchor_heading(): a calibration was taken at this moment)
+  bool anchor_set = false;
+  Eigen::Quaterniond q_anchor = Eigen::Quaterniond::Identity();  ///< 9D orientation then
+  Eigen::Vector3d anchor_offset_uT = Eigen::Vector3d::Zero();    ///< offset applied then
+  double anchor_heading_rad = 0;  ///< heading the offset learnt since caused at q_anchor
+  Eigen::Quaterniond q_anchor_heading = Eigen::Quaterniond::Identity();  ///< Rz of that
 };
 
 /// Everything a consumer reads after an update, in one plain struct (AttitudeFilter::output()).
@@ -282,6 +290,18 @@ class AttitudeFilter {
   /// One-sigma heading uncertainty of the 9D output, rad (large before any magnetometer).
   double heading_sigma_rad() const;
 
+  /// Heading anchor for a consumer that has just taken a calibration from this filter's
+  /// orientation (N-pose): that calibration absorbed the heading error the magnetometer's
+  /// then-unknown hard-iron offset caused in this pose. When the offset is learnt later the
+  /// heading becomes right and the calibration wrong by that error; from this call on the
+  /// 9D output keeps it: q_earth_sensor() = Rz(c) q9 with c = the heading error the offset
+  /// learnt since this call causes at this call's orientation (a constant for a constant
+  /// offset, so orientation-dependent errors are still removed). Calling it again re-anchors.
+  void anchor_heading();
+  void clear_heading_anchor();
+  /// c above, rad (0 without an anchor).
+  double anchor_heading_rad() const { return st_.anchor_set ? st_.anchor_heading_rad : 0.0; }
+
   FilterState state() const { return st_; }
   void set_state(const FilterState& s);
   const FilterCounters& counters() const { return cnt_; }
@@ -292,6 +312,7 @@ class AttitudeFilter {
   void update_gyr(const Eigen::Vector3d& gyr, double dt_s);
   void update_acc(const Eigen::Vector3d& acc, double dt_s);
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
+  void update_anchor();
   void select_hard_iron(const Eigen::Vector3d& m_raw_e, const Eigen::Vector3d& m_corr_e);
   /// Squared deviation of a field (norm, dip) from a reference, in units of the disturbance
   /// thresholds (mag_norm_th, mag_dip_th_deg).
