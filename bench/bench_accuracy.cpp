@@ -162,7 +162,7 @@ int run_accuracy(int argc, char** argv) {
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
       .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
       .option("anchor",
-              "filter heading anchored at the calibration (experimental): on|off (default off)")
+              "filter heading anchored at the calibration: on|off (default on, as the daemon)")
       .option("coupling-param",
               "HeadingCouplingOptions overrides, comma list of name=value "
               "(tau_s, min_flex_deg, min_axis_horizontal, "
@@ -208,7 +208,7 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.heading_coupling.enabled = coupling == "on";
-  const std::string anchor = args.get_or("anchor", "off");
+  const std::string anchor = args.get_or("anchor", "on");
   if (anchor != "on" && anchor != "off") {
     std::fprintf(stderr, "mocap bench accuracy: --anchor must be on or off\n");
     return 2;

@@ -413,15 +413,17 @@ void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
     auto score = [&](const Eigen::Vector3d& m) {
       const double n = m.norm();
       if (!(n > 0)) return 0.0;
-      return std::min(field_deviation2(n, dip_rad(m, n), st_.mag_ref_norm, st_.mag_ref_dip),
-                      25.0);
+      return std::min(field_deviation2(n, dip_rad(m, n), st_.mag_ref_norm, st_.mag_ref_dip), 25.0);
     };
     st_.hi_select += c_.k_hard_iron_select * (score(m_raw_e) - score(m_corr_e) - st_.hi_select);
     st_.hi_weight = std::clamp(st_.hi_select / p_.hard_iron_select_margin, 0.0, 1.0);
   }
   st_.hi_applied_uT = st_.hi_weight * h.used_uT;
-  if (consistent && h.used_consistent_uT.norm() > st_.hi_applied_uT.norm())
+  st_.hi_applied_consistent = false;
+  if (consistent && h.used_consistent_uT.norm() > st_.hi_applied_uT.norm()) {
     st_.hi_applied_uT = h.used_consistent_uT;
+    st_.hi_applied_consistent = true;
+  }
 }
 
 void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
@@ -514,8 +516,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
 
   // Heading measurement; an anchor adds back what the offset learnt since caused at the
   // anchor pose, so at that pose learning it changes nothing.
-  const double err =
-      wrap_pi(std::atan2(m_e.x(), m_e.y()) + st_.anchor_heading_rad - st_.delta_rad);
+  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) + st_.anchor_heading_rad - st_.delta_rad);
   if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
     // Gyro-consistency: the field in the almost-inertial frame must stay put.
     const Eigen::Vector3d m_i = st_.q_gyr * mag;
@@ -638,7 +639,10 @@ void AttitudeFilter::update_anchor() {
   const Eigen::Vector3d db = hard_iron_uT() - st_.anchor_offset_uT;
   // Only a residual-sized offset can have been present unnoticed at the anchor; a larger one
   // (a magnet attached since, a field gradient taken as an offset) leaves c as it was.
-  if (db.norm() > p_.anchor_max_offset * f || mag_disturbed() ||
+  // An offset applied because it explains a norm/dip deviation from the reference field
+  // appeared after that reference was taken (the reference included the residual present at
+  // start-up): only the consistent path's offset is taken as present at the anchor.
+  if (!st_.hi_applied_consistent || db.norm() > p_.anchor_max_offset * f || mag_disturbed() ||
       st_.hard_iron.restarts != st_.anchor_restarts)
     return;
   const Eigen::Vector3d v = st_.q_anchor * db;

@@ -67,15 +67,8 @@ TEST(AttitudeAnchor, OffsetLearntAfterTheAnchorKeepsTheAnchoredHeadingError) {
   const Eigen::Vector3d h(2.5, -2, 1.5);  // 3.5 uT from power-on (field 20 uT horizontal)
   for (auto& smp : s.samples)
     if (smp.valid & kFieldMag) smp.mag_uT += h;
-  // The default estimator applies an offset only while it explains a norm/dip disturbance
-  // and ramps it in over 3..4 sigmas, which a residual of this size hardly reaches: the
-  // anchor needs every significant offset applied (the configuration docs/accuracy.md
-  // measures with --anchor on).
-  FilterParams p;
-  p.hard_iron_select_margin = 0;
-  p.hard_iron_min_sigmas = 1;
-  const AnchorRun plain = run(s, false, 8, 50, p);
-  const AnchorRun anchored = run(s, true, 8, 50, p);
+  const AnchorRun plain = run(s, false, 8, 50);
+  const AnchorRun anchored = run(s, true, 8, 50);
   // Nothing learnt while still: the anchor pose carries the offset's heading error.
   EXPECT_GT(std::abs(plain.at_anchor_deg), 5.0);
   EXPECT_NEAR(plain.at_anchor_deg, anchored.at_anchor_deg, 1e-9);

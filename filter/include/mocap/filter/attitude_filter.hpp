@@ -115,9 +115,9 @@ struct FilterParams {
   /// ... or while the estimator's innovations have stayed consistent (averaged NIS below
   /// hard_iron_consistent_nis, no restart) for hard_iron_consistent_s: a residual offset too
   /// small to show in the norm/dip still turns the heading with the orientation. 0 = off.
-  double hard_iron_consistent_nis = 0.0;
+  double hard_iron_consistent_nis = 0.2;
   double hard_iron_consistent_s = 10.0;
-  double hard_iron_consistent_min_sigmas = 1.0;  ///< significance required on that path
+  double hard_iron_consistent_min_sigmas = 0.5;  ///< significance required on that path
   /// While an offset is applied its remaining uncertainty (one-sigma over the horizontal
   /// field, as a heading angle) relative to heading_sigma_deg, squared and times this weight,
   /// adds to the heading's soft-trust score: the heading follows a corrected field more slowly.
@@ -230,13 +230,14 @@ struct FilterState {
   bool mag_i_init = false;
   // hard-iron offset
   filt::HardIronEstimator hard_iron;
-  int hi_n = 0;          ///< magnetometer samples since the last estimator step
-  double hi_dt_s = 0;    ///< and their time
-  double hi_select = 0;  ///< low-passed score difference without / with the offset
-  double hi_weight = 0;  ///< weight of the offset applied (0..1)
+  int hi_n = 0;                ///< magnetometer samples since the last estimator step
+  double hi_dt_s = 0;          ///< and their time
+  double hi_select = 0;        ///< low-passed score difference without / with the offset
+  double hi_weight = 0;        ///< weight of the offset applied (0..1)
   double hi_consistent_s = 0;  ///< time the estimator's innovations have stayed consistent
   int hi_restarts_seen = 0;    ///< its restart count then
   Eigen::Vector3d hi_applied_uT = Eigen::Vector3d::Zero();  ///< offset subtracted
+  bool hi_applied_consistent = false;                       ///< ... by the consistency path
   // heading anchor (anchor_heading(): a calibration was taken at this moment)
   bool anchor_set = false;
   Eigen::Quaterniond q_anchor = Eigen::Quaterniond::Identity();  ///< 9D orientation then
