@@ -636,15 +636,19 @@ void AttitudeFilter::update_anchor() {
   const double dip = st_.mag_ref_norm > 0 ? st_.mag_ref_dip : 0.0;
   const double fh = f * std::cos(dip);
   if (!(fh > 0)) return;
+  if (st_.hard_iron.restarts != st_.anchor_restarts) {
+    // The estimator restarted (the model broke: a magnet, a gradient): what it had learnt is
+    // forgotten, so is the correction derived from it; the anchor stays inert from here on.
+    st_.anchor_heading_rad = 0;
+    return;
+  }
   const Eigen::Vector3d db = hard_iron_uT() - st_.anchor_offset_uT;
   // Only a residual-sized offset can have been present unnoticed at the anchor; a larger one
   // (a magnet attached since, a field gradient taken as an offset) leaves c as it was.
   // An offset applied because it explains a norm/dip deviation from the reference field
   // appeared after that reference was taken (the reference included the residual present at
   // start-up): only the consistent path's offset is taken as present at the anchor.
-  if (!st_.hi_applied_consistent || db.norm() > p_.anchor_max_offset * f || mag_disturbed() ||
-      st_.hard_iron.restarts != st_.anchor_restarts)
-    return;
+  if (!st_.hi_applied_consistent || db.norm() > p_.anchor_max_offset * f || mag_disturbed()) return;
   const Eigen::Vector3d v = st_.q_anchor * db;
   const double c = std::atan2(v.x(), fh + v.y());
   if (!std::isfinite(c)) return;
