@@ -307,8 +307,8 @@ class AttitudeFilter {
   /// 9D heading keeps it: c = the heading error the offset learnt since this call causes at
   /// this call's orientation is added to every heading measurement (a constant for a constant
   /// offset, so orientation-dependent errors are still removed; at the anchor pose learning
-  /// the offset changes nothing). Not after an estimator restart (a new offset) or for a
-  /// change above anchor_max_offset. Calling it again re-anchors.
+  /// the offset changes nothing). Only the residual path's offset, not while disturbed, not
+  /// above anchor_max_offset; an estimator restart drops c. Calling it again re-anchors.
   void anchor_heading();
   void clear_heading_anchor();
   /// c above, rad (0 without an anchor).
