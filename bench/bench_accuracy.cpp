@@ -71,6 +71,7 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
                                   {"travel_deg", e.travel_deg},
                                   {"parent_yaw_deg", e.parent_yaw_deg},
                                   {"child_yaw_deg", e.child_yaw_deg},
+                                  {"applied_child_yaw_deg", e.applied_child_yaw_deg},
                                   {"rms_residual", e.rms_residual},
                                   {"parent_travel_deg", e.parent_travel_deg},
                                   {"parent_valid", e.parent_valid}};
