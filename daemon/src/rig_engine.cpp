@@ -75,6 +75,13 @@ RigEngine::RigEngine(const Config& cfg, Logger* log)
     saved_revision_ = skeleton_.calibration_revision();
     if (log_) log_->info("calibration loaded from %s", file.c_str());
   }
+  if (!file.empty()) saver_ = std::make_unique<CalibrationSaver>(file, log_);
+}
+
+RigEngine::~RigEngine() = default;
+
+void RigEngine::flush_calibration_file() {
+  if (saver_) saver_->flush();
 }
 
 void RigEngine::on_sample(int i, const ImuSample& s) {
@@ -119,12 +126,7 @@ void RigEngine::save_calibration_file(int64_t t_ns) {
   saved_revision_ = skeleton_.calibration_revision();
   saved_t_ns_ = t_ns;
   const Calibration& c = skeleton_.calibration();
-  if (cfg_.calibration.file.empty() || !c.valid) return;
-  try {
-    save_calibration(c, cfg_.calibration.file);
-  } catch (const std::exception& e) {
-    if (log_) log_->error("cannot save calibration: %s", e.what());
-  }
+  if (saver_ && c.valid) saver_->offer(c);
 }
 
 SensorFilterState RigEngine::sensor_state(int i) const {

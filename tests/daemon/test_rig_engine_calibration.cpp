@@ -80,6 +80,7 @@ TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
       capture_started = true;
     }
     engine.build_frame(t_ns, frame);
+    engine.flush_calibration_file();  // written by a thread: wait for it before looking
     if (npose_text.empty() && fs::exists(file)) npose_text = read_text(file);
   }
   ASSERT_FALSE(npose_text.empty()) << engine.last_calibration_message();
@@ -93,6 +94,7 @@ TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
   const int64_t later_ns =
       static_cast<int64_t>((end_s + RigEngine::kSaveRefinedEveryS + 0.01) * 1e9);
   engine.build_frame(later_ns, frame);
+  engine.flush_calibration_file();
   const Calibration saved = load_calibration(file.string());
   EXPECT_LT(max_quat_diff(saved, engine.skeleton().calibration()), 1e-12);
   EXPECT_NEAR(saved.heading_deg, engine.skeleton().calibration().heading_deg, 1e-9);

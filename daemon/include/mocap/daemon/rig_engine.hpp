@@ -1,7 +1,8 @@
 // The real PoseEngine: one AttitudeFilter per sensor, the skeleton's Calibrator for N-/T-pose
 // captures, and the Skeleton solver (forward kinematics, joint limits, root motion). The
 // calibration in use (the pose capture refined from knee/elbow motion, heading resets) is saved
-// to calibration.file whenever it changes, at most every kSaveRefinedEveryS of sample time.
+// to calibration.file whenever it changes, at most every kSaveRefinedEveryS of sample time, by
+// a writer thread (CalibrationSaver): the pipeline never waits for the disk.
 #pragma once
 
 #include <cstdint>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "mocap/daemon/calibration_saver.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/pose_engine.hpp"
 #include "mocap/filter/attitude_filter.hpp"
@@ -28,6 +30,8 @@ class RigEngine final : public PoseEngine {
   /// Builds filters and skeleton for the config's sensors; loads calibration.file if it exists.
   /// Throws std::runtime_error on an unreadable calibration or body file.
   explicit RigEngine(const Config& cfg, Logger* log = nullptr);
+  /// Writes a calibration still waiting for the disk.
+  ~RigEngine() override;
 
   void on_sample(int sensor_index, const ImuSample& sample) override;
   void set_sensor_live(int, bool) override {}
@@ -40,6 +44,8 @@ class RigEngine final : public PoseEngine {
   const std::string& last_calibration_message() const { return calib_message_; }
   Skeleton& skeleton() { return skeleton_; }
   const AttitudeFilter& filter(int sensor) const { return filters_[sensor]; }
+  /// Blocks until every calibration handed to the writer thread so far is on disk.
+  void flush_calibration_file();
 
  private:
   Config cfg_;
@@ -52,6 +58,7 @@ class RigEngine final : public PoseEngine {
   std::string calib_message_;
   uint64_t saved_revision_ = 0;     ///< skeleton calibration revision last saved (or loaded)
   int64_t saved_t_ns_ = INT64_MIN;  ///< sample time of that save
+  std::unique_ptr<CalibrationSaver> saver_;  ///< null without calibration.file
   void save_calibration_file(int64_t t_ns);
 };
 
