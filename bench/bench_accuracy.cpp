@@ -4,8 +4,11 @@
 // RMSE, root drift vs ground truth) and, with --markdown, the table for docs/accuracy.md.
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "bench.hpp"
@@ -71,6 +74,7 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
                                   {"travel_deg", e.travel_deg},
                                   {"parent_yaw_deg", e.parent_yaw_deg},
                                   {"child_yaw_deg", e.child_yaw_deg},
+                                  {"applied_child_yaw_deg", e.applied_child_yaw_deg},
                                   {"rms_residual", e.rms_residual},
                                   {"parent_travel_deg", e.parent_travel_deg},
                                   {"parent_valid", e.parent_valid}};
@@ -147,6 +151,27 @@ void print_markdown_row(const sim::AccuracyResult& r) {
                r.inferred_max_rmse_deg, r.segment_mean_rmse_deg, drift);
 }
 
+/// Applies a comma list of name=value overrides to the named fields; false (with a message
+/// naming the option and the entry) on an unknown name or a bad number.
+bool set_params(const std::string& list, const char* option,
+                std::initializer_list<std::pair<std::string_view, double*>> fields) {
+  for (const std::string& kv : expand(list, {})) {
+    if (kv.empty()) continue;
+    const size_t eq = kv.find('=');
+    double* field = nullptr;
+    for (const auto& [name, ptr] : fields)
+      if (eq != std::string::npos && kv.compare(0, eq, name) == 0 && name.size() == eq) field = ptr;
+    char* end = nullptr;
+    const double v = eq == std::string::npos ? 0 : std::strtod(kv.c_str() + eq + 1, &end);
+    if (!field || !end || end == kv.c_str() + eq + 1 || *end != '\0') {
+      std::fprintf(stderr, "mocap bench accuracy: bad --%s '%s'\n", option, kv.c_str());
+      return false;
+    }
+    *field = v;
+  }
+  return true;
+}
+
 }  // namespace
 
 int run_accuracy(int argc, char** argv) {
@@ -169,6 +194,10 @@ int run_accuracy(int argc, char** argv) {
               "max_elevation_mismatch, max_correction_deg, max_residual_deg)")
       .flag("no-carry", "heading coupling: do not carry a child's correction to the next segment")
       .flag("no-refine", "N-pose calibration only (no hinge-motion refinement)")
+      .option("refine-param",
+              "HingeRefineOptions overrides, comma list of name=value (min_travel_deg, "
+              "max_yaw_deg, min_rate_deg_s, via_still_fraction, "
+              "min_parent_off_axis_deg)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
               "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)")
@@ -214,28 +243,25 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.anchor_heading = anchor == "on";
-  for (const std::string& kv : expand(args.get_or("coupling-param", ""), {})) {
-    if (kv.empty()) continue;
-    const size_t eq = kv.find('=');
-    HeadingCouplingOptions& c = base.heading_coupling;
-    const std::string k = kv.substr(0, eq);
-    double* field = k == "tau_s"                    ? &c.tau_s
-                    : k == "min_flex_deg"           ? &c.min_flex_deg
-                    : k == "min_axis_horizontal"    ? &c.min_axis_horizontal
-                    : k == "max_elevation_mismatch" ? &c.max_elevation_mismatch
-                    : k == "max_correction_deg"     ? &c.max_correction_deg
-                    : k == "max_residual_deg"       ? &c.max_residual_deg
-                    : k == "disturbed_weight"       ? &c.disturbed_weight
-                                                    : nullptr;
-    char* end = nullptr;
-    const double v = eq == std::string::npos ? 0 : std::strtod(kv.c_str() + eq + 1, &end);
-    if (!field || eq == std::string::npos || !end || *end != '\0') {
-      std::fprintf(stderr, "mocap bench accuracy: bad --coupling-param '%s'\n", kv.c_str());
-      return 2;
-    }
-    *field = v;
-  }
+  HeadingCouplingOptions& c = base.heading_coupling;
+  if (!set_params(args.get_or("coupling-param", ""), "coupling-param",
+                  {{"tau_s", &c.tau_s},
+                   {"min_flex_deg", &c.min_flex_deg},
+                   {"min_axis_horizontal", &c.min_axis_horizontal},
+                   {"max_elevation_mismatch", &c.max_elevation_mismatch},
+                   {"max_correction_deg", &c.max_correction_deg},
+                   {"max_residual_deg", &c.max_residual_deg},
+                   {"disturbed_weight", &c.disturbed_weight}}))
+    return 2;
   if (args.has("no-carry")) base.heading_coupling.carry_distal = false;
+  HingeRefineOptions& h = base.hinge_refine;
+  if (!set_params(args.get_or("refine-param", ""), "refine-param",
+                  {{"min_travel_deg", &h.min_travel_deg},
+                   {"max_yaw_deg", &h.max_yaw_deg},
+                   {"min_rate_deg_s", &h.min_rate_deg_s},
+                   {"via_still_fraction", &h.via_still_fraction},
+                   {"min_parent_off_axis_deg", &h.min_parent_off_axis_deg}}))
+    return 2;
   if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();

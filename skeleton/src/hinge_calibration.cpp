@@ -2,6 +2,7 @@
 #include "mocap/skeleton/hinge_calibration.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -129,33 +130,12 @@ bool HingeAxisRefiner::estimate(int hinge, HingeEstimate& out) const {
   const Sums& s = sums_[hinge];
   out.travel_deg = s.travel_rad * kRadToDeg;
   if (s.n < 10 || s.scale <= 0) return false;
-  const auto cost = [&](double yaw_p, double yaw_c) {
-    const double fp = 2 * (kAxisPhi + yaw_p), fc = 2 * (kAxisPhi + yaw_c);
-    const Eigen::Vector4d x(std::cos(fp), std::sin(fp), std::cos(fc), std::sin(fc));
-    return x.dot(s.h * x) + 2 * s.g.dot(x) + s.s;
-  };
   const double range = opt_.max_yaw_deg * kDegToRad;
-  double best = std::numeric_limits<double>::infinity(), bp = 0, bc = 0;
-  // Coarse grid (1 deg), then a fine one (0.05 deg) around the best point.
-  for (int pass = 0; pass < 2; ++pass) {
-    const double step = pass == 0 ? kDegToRad : 0.05 * kDegToRad;
-    const int n = pass == 0 ? static_cast<int>(std::ceil(opt_.max_yaw_deg)) : 20;
-    const double cp = pass == 0 ? 0.0 : bp, cc = pass == 0 ? 0.0 : bc;
-    for (int i = -n; i <= n; ++i) {
-      for (int j = -n; j <= n; ++j) {
-        const double yp = cp + i * step, yc = cc + j * step;
-        if (std::abs(yp) > range || std::abs(yc) > range) continue;
-        const double v = cost(yp, yc);
-        if (v < best) {
-          best = v;
-          bp = yp;
-          bc = yc;
-        }
-      }
-    }
-  }
+  double bp = 0, bc = 0;
+  const double best = minimize(s, range, false, bp, bc);
   out.parent_yaw_deg = bp * kRadToDeg;
   out.child_yaw_deg = bc * kRadToDeg;
+  out.applied_child_yaw_deg = out.child_yaw_deg;
   out.rms_residual = std::sqrt(std::max(best, 0.0) / s.scale);
   out.parent_travel_deg = s.parent_travel_rad * kRadToDeg;
   const double edge = range - 0.5 * kDegToRad;
@@ -165,14 +145,87 @@ bool HingeAxisRefiner::estimate(int hinge, HingeEstimate& out) const {
   return ok;
 }
 
+double HingeAxisRefiner::minimize(const Sums& s, double range, bool parent_fixed, double& yaw_p,
+                                  double& yaw_c) {
+  // cost(y) = x^T H x + 2 g^T x + s with x = (cos fp, sin fp, cos fc, sin fc), f = 2 (phi + y).
+  const auto xvec = [](double yp, double yc) {
+    const double fp = 2 * (kAxisPhi + yp), fc = 2 * (kAxisPhi + yc);
+    return Eigen::Vector4d(std::cos(fp), std::sin(fp), std::cos(fc), std::sin(fc));
+  };
+  const auto cost = [&](double yp, double yc) {
+    const Eigen::Vector4d x = xvec(yp, yc);
+    return x.dot(s.h * x) + 2 * s.g.dot(x) + s.s;
+  };
+  // Coarse grid (1 deg) for the basin of the global minimum ...
+  double best = std::numeric_limits<double>::infinity();
+  const double fixed_p = yaw_p;
+  const int n_grid = static_cast<int>(std::floor(range * kRadToDeg));
+  for (int i = parent_fixed ? 0 : -n_grid; i <= (parent_fixed ? 0 : n_grid); ++i) {
+    for (int j = -n_grid; j <= n_grid; ++j) {
+      const double yp = parent_fixed ? fixed_p : i * kDegToRad, yc = j * kDegToRad;
+      const double v = cost(yp, yc);
+      if (v < best) {
+        best = v;
+        yaw_p = yp;
+        yaw_c = yc;
+      }
+    }
+  }
+  // ... then damped Newton iterations to its exact minimum. The minimum often lies in a long
+  // narrow valley (the two yaws are strongly correlated), where a finite grid around the best
+  // node snaps to a point up to degrees away along the valley and jumps between grid points as
+  // the data change slightly; the iteration is continuous in the data.
+  double lambda = 0;
+  for (int it = 0; it < 100; ++it) {
+    const double fp = 2 * (kAxisPhi + yaw_p), fc = 2 * (kAxisPhi + yaw_c);
+    const Eigen::Vector4d x = xvec(yaw_p, yaw_c);
+    const Eigen::Vector4d r = s.h * x + s.g;
+    // dx/dy (x depends on yaw_p through entries 0, 1 and on yaw_c through 2, 3).
+    Eigen::Matrix<double, 4, 2> dx = Eigen::Matrix<double, 4, 2>::Zero();
+    dx(0, 0) = -2 * std::sin(fp);
+    dx(1, 0) = 2 * std::cos(fp);
+    dx(2, 1) = -2 * std::sin(fc);
+    dx(3, 1) = 2 * std::cos(fc);
+    Eigen::Vector2d grad = 2 * dx.transpose() * r;
+    Eigen::Matrix2d hess = 2 * dx.transpose() * s.h * dx;
+    hess(0, 0) -= 8 * r.head<2>().dot(x.head<2>());  // d2x/dy2 = -4 x
+    hess(1, 1) -= 8 * r.tail<2>().dot(x.tail<2>());
+    if (parent_fixed) {
+      grad.x() = 0;
+      hess(0, 1) = hess(1, 0) = 0;
+      hess(0, 0) = 1;
+    }
+    const double diag_scale = std::max(std::abs(hess(0, 0)) + std::abs(hess(1, 1)), 1e-300);
+    bool improved = false, converged = false;
+    for (int tries = 0; tries < 30 && !improved; ++tries) {
+      Eigen::Matrix2d m = hess;
+      m.diagonal().array() += lambda * diag_scale;
+      const Eigen::LDLT<Eigen::Matrix2d> ldlt(m);
+      Eigen::Vector2d step = Eigen::Vector2d::Zero();
+      if (ldlt.info() == Eigen::Success && ldlt.isPositive()) step = -ldlt.solve(grad);
+      const double np = std::clamp(yaw_p + step.x(), -range, range);
+      const double nc = std::clamp(yaw_c + step.y(), -range, range);
+      const double v = step.allFinite() ? cost(np, nc) : best;
+      if (v < best) {
+        improved = true;
+        converged = std::abs(np - yaw_p) + std::abs(nc - yaw_c) < 1e-10;
+        best = v;
+        yaw_p = np;
+        yaw_c = nc;
+        lambda *= 0.25;
+      } else {
+        lambda = lambda == 0 ? 1e-6 : lambda * 8;
+      }
+    }
+    if (!improved || converged) break;
+  }
+  return best;
+}
+
 bool HingeAxisRefiner::update(int64_t t_ns) {
   if (!opt_.enabled || !started_) return false;
   if (static_cast<double>(t_ns - t_last_update_ns_) * 1e-9 < opt_.update_interval_s) return false;
   t_last_update_ns_ = t_ns;
-  std::array<double, kSegmentCount> alpha{};
-  std::array<bool, kSegmentCount> known{};
-  double sum = 0;
-  int n = 0;
   for (size_t h = 0; h < kRefinePairs.size(); ++h) {
     // Re-estimate only pairs with new data (the search is ~10^4 cost evaluations).
     if (sums_[h].n != n_estimated_[h]) {
@@ -181,25 +234,48 @@ bool HingeAxisRefiner::update(int64_t t_ns) {
       est_[h] = e;
       n_estimated_[h] = sums_[h].n;
     }
-    const HingeEstimate& e = est_[h];
-    if (!e.valid) continue;
-    const int c = index(kRefinePairs[h].child);
-    const int p = index(kRefinePairs[h].parent);
-    alpha[c] = e.child_yaw_deg * kDegToRad;
-    known[c] = true;
-    sum += alpha[c];
-    ++n;
-    if (kRefinePairs[h].via < 0 && e.parent_valid) {
-      alpha[p] = e.parent_yaw_deg * kDegToRad;
-      known[p] = true;
-      sum += alpha[p];
-      ++n;
-    }
   }
-  if (n == 0) return false;
-  const double mean = sum / n;
-  for (int i = 0; i < kSegmentCount; ++i)
-    if (!known[i]) alpha[i] = mean;
+  // A parent whose yaw the pair does not pin (an upper arm hanging still, or the via pairs,
+  // whose parent is not adjacent) gets the mean offset like every unidentified segment; its
+  // child's yaw is then the best fit given that parent yaw, not the joint fit's (which lets the
+  // unpinned parent yaw wander to anywhere in +-max_yaw_deg and takes the child with it). The
+  // mean depends on those children: a few fixed-point passes (each moves it far less than 0.01
+  // deg after the second).
+  std::array<double, kSegmentCount> alpha{};
+  double mean = 0;
+  const double range = opt_.max_yaw_deg * kDegToRad;
+  for (int pass = 0; pass < 3; ++pass) {
+    std::array<bool, kSegmentCount> known{};
+    alpha.fill(0.0);
+    double sum = 0;
+    int n = 0;
+    for (size_t h = 0; h < kRefinePairs.size(); ++h) {
+      HingeEstimate& e = est_[h];
+      if (!e.valid) continue;
+      const int c = index(kRefinePairs[h].child);
+      const int p = index(kRefinePairs[h].parent);
+      const bool own_parent = kRefinePairs[h].via < 0 && e.parent_valid;
+      if (!own_parent && kRefinePairs[h].via < 0 && pass > 0) {
+        double yp = mean, yc = 0;
+        minimize(sums_[h], range, true, yp, yc);
+        e.applied_child_yaw_deg = yc * kRadToDeg;
+      }
+      alpha[c] = e.applied_child_yaw_deg * kDegToRad;
+      known[c] = true;
+      sum += alpha[c];
+      ++n;
+      if (own_parent) {
+        alpha[p] = e.parent_yaw_deg * kDegToRad;
+        known[p] = true;
+        sum += alpha[p];
+        ++n;
+      }
+    }
+    if (n == 0) return false;
+    mean = sum / n;
+    for (int i = 0; i < kSegmentCount; ++i)
+      if (!known[i]) alpha[i] = mean;
+  }
   const bool changed = alpha != alpha_ || mean != common_;
   alpha_ = alpha;
   common_ = mean;
@@ -219,7 +295,8 @@ Calibration HingeAxisRefiner::apply(const Calibration& base,
   Calibration c = base;
   c.heading_deg = base.heading_deg + common_rad * kRadToDeg;
   for (int i = 0; i < kSegmentCount; ++i) {
-    if (!base.calibrated[i] || alpha[i] == 0) continue;
+    // Every calibrated segment takes the common turn, whatever its own offset (also exactly 0).
+    if (!base.calibrated[i]) continue;
     c.q_sensor_segment[i] = (base.q_sensor_segment[i] * yaw_rotation(alpha[i])).normalized();
     c.q_correction[i] = (yaw_rotation(common_rad - alpha[i]) * base.q_correction[i]).normalized();
   }

@@ -196,5 +196,45 @@ TEST(HingeCalibration, ApplyIsAConjugationPerSegment) {
   EXPECT_NEAR(c.heading_deg, 0.02 * kRadToDeg, 1e-12);
 }
 
+TEST(HingeCalibration, ApplyTurnsASegmentWithZeroOffsetByTheCommonYaw) {
+  // An estimated offset of exactly 0 is an estimate like any other: the segment still takes the
+  // common body-heading turn (it was once skipped as "no offset", leaving it yawed against all
+  // the others by the common turn).
+  Calibration base;
+  base.valid = true;
+  base.calibrated.fill(true);
+  std::array<double, kSegmentCount> alpha{};
+  alpha.fill(0.05);
+  alpha[index(Segment::shank_r)] = 0.0;
+  const Calibration c = HingeAxisRefiner::apply(base, alpha, 0.02);
+  std::mt19937 rng(4);
+  const Eigen::Quaterniond q = test::random_small_rotation(rng, 90);
+  const int s = index(Segment::shank_r);
+  EXPECT_LT(angle_deg(c.segment_from_sensor(s, q), yaw_rotation(0.02) * q), 1e-9);
+}
+
+TEST(HingeCalibration, EstimateIsContinuousInTheBaseHeading) {
+  // Turning the base calibration's body heading by 0.01 deg turns every calibrated segment
+  // frame about its vertical by 0.01 deg, so every yaw offset must move by -0.01 deg (the
+  // refinement is equivariant). A finite search grid snapped to its nodes (0.05 deg) and,
+  // in the long narrow valley of the cost where parent and child yaw are correlated, to points
+  // degrees apart along the valley.
+  std::array<std::array<HingeEstimate, kRefinePairs.size()>, 2> est;
+  for (int k = 0; k < 2; ++k) {
+    std::mt19937 rng(11);
+    const HingeRig s = make_setup(rng, 5.0 + 0.01 * k);
+    Skeleton sk(BodyModel(BodyModelConfig{}), default_joint_limits(), RigMapping::full(), {});
+    run(s, true, true, rng, &sk);
+    est[k] = sk.hinge_refiner().hinges();
+  }
+  for (size_t h = 0; h < kRefinePairs.size(); ++h) {
+    ASSERT_TRUE(est[0][h].valid && est[1][h].valid) << h;
+    EXPECT_NEAR(est[1][h].applied_child_yaw_deg - est[0][h].applied_child_yaw_deg, -0.01, 0.003)
+        << h;
+    if (est[0][h].parent_valid)
+      EXPECT_NEAR(est[1][h].parent_yaw_deg - est[0][h].parent_yaw_deg, -0.01, 0.003) << h;
+  }
+}
+
 }  // namespace
 }  // namespace mocap

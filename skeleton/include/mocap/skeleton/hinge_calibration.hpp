@@ -52,10 +52,13 @@ struct HingeRefineOptions {
 
 /// One hinge's identification state (for diagnostics and the daemon's status).
 struct HingeEstimate {
-  bool valid = false;            ///< travel reached and the fit is well-conditioned
-  double travel_deg = 0;         ///< accumulated flexion travel
-  double parent_yaw_deg = 0;     ///< estimated yaw offset of the parent's calibrated frame
-  double child_yaw_deg = 0;      ///< ... and of the child's
+  bool valid = false;         ///< travel reached and the fit is well-conditioned
+  double travel_deg = 0;      ///< accumulated flexion travel
+  double parent_yaw_deg = 0;  ///< estimated yaw offset of the parent's calibrated frame
+  double child_yaw_deg = 0;   ///< ... and of the child's (joint fit of both)
+  /// The child's yaw offset in use: the joint fit's, or, when the parent's yaw is not pinned
+  /// (parent_valid false, via pairs), the best fit given the parent's applied (mean) offset.
+  double applied_child_yaw_deg = 0;
   double rms_residual = 0;       ///< RMS of |w_p x j_p|^2 - |w_c x j_c|^2 relative to its scale
   double parent_travel_deg = 0;  ///< the parent's own rotation off the hinge axis meanwhile
   bool parent_valid = false;     ///< the parent turned enough to pin its yaw too
@@ -125,6 +128,11 @@ class HingeAxisRefiner {
     int n = 0;
   };
   bool estimate(int hinge, HingeEstimate& out) const;
+  /// Minimum of a pair's squared residuals over the two yaw offsets (rad, within +-range):
+  /// 1 deg grid, then damped Newton iterations. With parent_fixed, yaw_p is given and only
+  /// yaw_c is searched. Returns the minimal cost.
+  static double minimize(const Sums& s, double range, bool parent_fixed, double& yaw_p,
+                         double& yaw_c);
 
   RigMapping rig_;
   HingeRefineOptions opt_;
