@@ -62,7 +62,9 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
         {"mount_yaw_error_deg", r.mount_yaw_error_deg[s]},
         {"filter_heading_drift_deg", r.sensor_heading_drift_deg[s]},
         {"filter_inclination_rmse_deg", r.sensor_inclination_rmse_deg[s]},
-        {"mag_disturbed_fraction", r.sensor_mag_disturbed_fraction[s]}};
+        {"mag_disturbed_fraction", r.sensor_mag_disturbed_fraction[s]},
+        {"reference_imposed", r.sensor_ref_imposed[s]},
+        {"anchor_trust_deg", r.sensor_anchor_trust_deg[s]}};
   }
   j["sensor_diagnostics"] = diag;
   j["hinges_identified"] = r.hinges_identified;
@@ -188,6 +190,8 @@ int run_accuracy(int argc, char** argv) {
       .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
       .option("anchor",
               "filter heading anchored at the calibration: on|off (default on, as the daemon)")
+      .option("consensus",
+              "rig consensus of the reference field: on|off (default on, as the daemon)")
       .option("coupling-param",
               "HeadingCouplingOptions overrides, comma list of name=value "
               "(tau_s, min_flex_deg, min_axis_horizontal, "
@@ -243,6 +247,12 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.anchor_heading = anchor == "on";
+  const std::string consensus = args.get_or("consensus", "on");
+  if (consensus != "on" && consensus != "off") {
+    std::fprintf(stderr, "mocap bench accuracy: --consensus must be on or off\n");
+    return 2;
+  }
+  base.rig_consensus = consensus == "on";
   HeadingCouplingOptions& c = base.heading_coupling;
   if (!set_params(args.get_or("coupling-param", ""), "coupling-param",
                   {{"tau_s", &c.tau_s},

@@ -61,6 +61,7 @@ FilterParams filter_params(const FilterConfig& f) {
 RigEngine::RigEngine(const Config& cfg, Logger* log)
     : cfg_(cfg),
       log_(log),
+      consensus_(cfg.sensors.size()),
       skeleton_(body_model(cfg), default_joint_limits(), rig_mapping(cfg), skeleton_options(cfg)),
       calibrator_(rig_mapping(cfg), calibrator_options(cfg)) {
   const FilterParams fp = filter_params(cfg.filter);
@@ -88,6 +89,9 @@ void RigEngine::on_sample(int i, const ImuSample& s) {
   AttitudeFilter& f = filters_[i];
   f.update(s);
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
+  // Every sensor of the body sees the same earth field: a reference that differs from the
+  // others' median (a magnet beside it at start-up) is replaced (low rate, docs/filter.md).
+  if (cfg_.filter.use_mag) consensus_.step(newest_t_ns_, filters_);
   const int seg = segment_of_[i];
   if (seg < 0) return;
   const Eigen::Quaterniond q = cfg_.filter.use_mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();

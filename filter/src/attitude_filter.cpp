@@ -503,6 +503,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
         }
         st_.mag_ref_norm = st_.mag_cand_norm;
         st_.mag_ref_dip = st_.mag_cand_dip;
+        st_.ref_imposed = false;
         st_.mag_disturbed = false;
         st_.mag_undisturbed_t_s = p_.mag_min_undisturbed_time_s;
       }
@@ -516,7 +517,8 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
 
   // Heading measurement; an anchor adds back what the offset learnt since caused at the
   // anchor pose, so at that pose learning it changes nothing.
-  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) + st_.anchor_heading_rad - st_.delta_rad);
+  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) + st_.anchor_heading_rad +
+                             st_.anchor_trust_rad - st_.delta_rad);
   if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
     // Gyro-consistency: the field in the almost-inertial frame must stay put.
     const Eigen::Vector3d m_i = st_.q_gyr * mag;
@@ -580,6 +582,38 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       st_.mag_reject_t_s = std::max(st_.mag_reject_t_s - p_.mag_rejection_factor * ts, 0.0);
     }
   }
+  if (st_.anchor_trust_pending) {
+    // Trust anchor: the calibration took this sensor's heading while its field was untrusted.
+    // If the field then was not the earth field (its norm/dip differ from the reference, or
+    // before one exists from the current field) that heading was bent: it is held, and the
+    // first trusted field's heading error becomes part of the anchor (averaged) instead of
+    // turning the heading away from what the calibration absorbed. A field then like the
+    // reference: nothing to keep.
+    const bool ref = st_.mag_have_ref;
+    const double rn = ref ? st_.mag_ref_norm : st_.mag_norm_dip[0];
+    const double rd = ref ? st_.mag_ref_dip : st_.mag_norm_dip[1];
+    const bool bent = field_deviation2(st_.anchor_cal_norm, st_.anchor_cal_dip, rn, rd) > 1.0;
+    if (!bent) {
+      if (ref && !st_.mag_disturbed) st_.anchor_trust_pending = false;
+    } else if (!ref) {
+      use_init = false;
+      k = 0;
+    } else if (!st_.mag_disturbed) {
+      use_init = false;
+      k = 0;
+      if (field_deviation2(st_.mag_norm_dip[0], st_.mag_norm_dip[1], rn, rd) <=
+          p_.anchor_trust_max_dev) {
+        st_.anchor_trust_sum_rad += err;
+        ++st_.anchor_trust_n;
+        st_.anchor_trust_t_s += ts;
+        if (st_.anchor_trust_t_s >= p_.anchor_trust_avg_s) {
+          st_.anchor_trust_rad =
+              wrap_pi(st_.anchor_trust_rad - st_.anchor_trust_sum_rad / st_.anchor_trust_n);
+          st_.anchor_trust_pending = false;
+        }
+      }
+    }
+  }
   if (st_.k_mag_init != 0 && use_init) {
     k = std::max(k, st_.k_mag_init);
     st_.k_mag_init = st_.k_mag_init / (st_.k_mag_init + 1);
@@ -615,6 +649,16 @@ Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
 }
 
 void AttitudeFilter::anchor_heading() {
+  // The field is untrusted now: the calibration takes a gyro-held heading; keep it when the
+  // field is trusted again (update_mag). A trust anchor already set stays (it is part of the
+  // heading this calibration takes).
+  st_.anchor_trust_armed = p_.anchor_trust_avg_s > 0 && (mag_disturbed() || mag_no_reference());
+  st_.anchor_trust_pending = st_.anchor_trust_armed;
+  st_.anchor_trust_sum_rad = 0;
+  st_.anchor_trust_n = 0;
+  st_.anchor_trust_t_s = 0;
+  st_.anchor_cal_norm = st_.mag_norm_dip[0];
+  st_.anchor_cal_dip = st_.mag_norm_dip[1];
   st_.anchor_set = true;
   st_.q_anchor = st_.q_delta * (st_.q_acc * st_.q_gyr);
   st_.anchor_offset_uT = hard_iron_uT();
@@ -625,6 +669,41 @@ void AttitudeFilter::anchor_heading() {
 void AttitudeFilter::clear_heading_anchor() {
   st_.anchor_set = false;
   st_.anchor_heading_rad = 0;
+  st_.anchor_trust_pending = false;
+  st_.anchor_trust_armed = false;
+  st_.anchor_trust_rad = 0;
+}
+
+void AttitudeFilter::set_reference_field(double norm_uT, double dip_rad) {
+  if (!(norm_uT > 0) || !std::isfinite(norm_uT) || !std::isfinite(dip_rad) ||
+      !p_.mag_dist_rejection)
+    return;
+  if (!st_.mag_have_ref) {
+    // End of start-up as if accepted (update_mag): converge on samples that pass the tests.
+    st_.mag_have_ref = true;
+    const double s0 = p_.mag_first_ref_sigma_deg * kDeg;
+    st_.delta_var_rad2 = std::max(st_.delta_var_rad2, s0 * s0);
+    st_.k_mag_init = st_.delta_var_rad2 / (st_.delta_var_rad2 + c_.heading_r0_rad2);
+  }
+  st_.mag_ref_norm = norm_uT;
+  st_.mag_ref_dip = dip_rad;
+  st_.ref_imposed = true;
+  if (st_.anchor_trust_armed && !st_.anchor_trust_pending &&
+      field_deviation2(st_.anchor_cal_norm, st_.anchor_cal_dip, norm_uT, dip_rad) > 1.0) {
+    // The calibration's field was taken for the earth's only because this sensor had accepted
+    // it as its own reference: it was not; keep the heading the calibration took (update_mag).
+    st_.anchor_trust_pending = true;
+    st_.anchor_trust_sum_rad = 0;
+    st_.anchor_trust_n = 0;
+    st_.anchor_trust_t_s = 0;
+  }
+  // The sensor's own candidate (a local field) must be earned again, while rotating.
+  st_.mag_cand_t_s = 0;
+  if (std::abs(st_.mag_norm_dip[0] - norm_uT) >= p_.mag_norm_th * norm_uT ||
+      std::abs(st_.mag_norm_dip[1] - dip_rad) >= p_.mag_dip_th_deg * kDeg) {
+    st_.mag_disturbed = true;
+    st_.mag_undisturbed_t_s = 0;
+  }
 }
 
 // The offset learnt since the anchor, b_new - b_anchor, was still in the field when the

@@ -7,6 +7,7 @@
 
 #include "mocap/filter/attitude_filter.hpp"
 #include "mocap/filter/filter_param_names.hpp"
+#include "mocap/filter/rig_field_consensus.hpp"
 #include "mocap/sim/motion.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/skeleton/calibration.hpp"
@@ -63,6 +64,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       throw std::invalid_argument("accuracy: filter parameter '" + a + "': " + err);
   }
   std::vector<AttitudeFilter> filters(Performer::kSensorCount, AttitudeFilter(fp));
+  filt::RigFieldConsensus consensus(filters.size());
   CalibratorOptions copt;
   copt.capture_s = o.capture_s;
   copt.heading = o.heading;
@@ -122,6 +124,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
         skeleton.set_sensor_orientation(seg, q, s.t_host_ns, flags);
       }
     }
+    if (o.rig_consensus) consensus.step(t_ns, filters);
     if (calibrator.capturing() && calibrator.done(t_ns)) {
       const CalibrationResult cr = calibrator.finish();
       r.calibration_message = cr.message;
@@ -213,6 +216,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     r.sensor_heading_drift_deg[s] = std::sqrt(heading_sq[id] / r.frames);
     r.sensor_inclination_rmse_deg[s] = std::sqrt(incl_sq[id] / r.frames);
     r.sensor_mag_disturbed_fraction[s] = mag_disturbed[id] / r.frames;
+    r.sensor_ref_imposed[s] = filters[id].mag_reference_imposed();
+    r.sensor_anchor_trust_deg[s] = filters[id].anchor_trust_rad() * kRadToDeg;
   }
   r.root_drift_fraction = r.distance_walked_m >= 1.0 ? r.root_drift_m / r.distance_walked_m : 0.0;
   return r;

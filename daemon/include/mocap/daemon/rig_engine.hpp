@@ -15,6 +15,7 @@
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/pose_engine.hpp"
 #include "mocap/filter/attitude_filter.hpp"
+#include "mocap/filter/rig_field_consensus.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
@@ -51,6 +52,7 @@ class RigEngine final : public PoseEngine {
   Config cfg_;
   Logger* log_;
   std::vector<AttitudeFilter> filters_;
+  filt::RigFieldConsensus consensus_;  ///< reference field shared by the rig's sensors
   std::vector<int> segment_of_;
   Skeleton skeleton_;
   Calibrator calibrator_;

@@ -124,6 +124,14 @@ struct FilterParams {
   double hard_iron_trust_weight = 0.0;  // off: slower heading costs more (gyro drift) on BROAD
   /// anchor_heading(): largest offset change (x F) taken as present at the anchor.
   double anchor_max_offset = 0.08;
+  /// anchor_heading() while the field is untrusted (disturbed or no reference) and not like the
+  /// reference (norm/dip beyond the thresholds): the calibration took a bent heading; it is
+  /// held (gyro only) until the field is trusted; then (within
+  /// anchor_trust_max_dev of the reference, squared deviation in units of the thresholds, as the
+  /// soft trust) its heading error is averaged over anchor_trust_avg_s (heading held) and
+  /// added to the anchor instead of turning the heading. 0 = off (the field corrects it).
+  double anchor_trust_avg_s = 1.0;
+  double anchor_trust_max_dev = 0.25;
   // --- magnetometer latency (ours) ---
   /// A magnetometer often samples the motion later than the gyro (longer integration,
   /// internal filters): during fast rotation its heading then lags. The latency is
@@ -244,6 +252,15 @@ struct FilterState {
   Eigen::Vector3d anchor_offset_uT = Eigen::Vector3d::Zero();    ///< offset applied then
   double anchor_heading_rad = 0;  ///< heading the offset learnt since caused at q_anchor
   int anchor_restarts = 0;        ///< estimator restarts then (a restart since: new offset)
+  // trust anchor (anchor_heading() while the field was untrusted; set when it is trusted again)
+  bool anchor_trust_pending = false;
+  bool anchor_trust_armed = false;  ///< anchor_heading() was called while untrusted
+  double anchor_trust_rad = 0;      ///< heading error kept (added to every measurement)
+  double anchor_trust_sum_rad = 0;  ///< errors summed while averaging
+  int anchor_trust_n = 0;
+  double anchor_trust_t_s = 0;
+  double anchor_cal_norm = 0, anchor_cal_dip = 0;  ///< field (norm uT, dip rad) at the call
+  bool ref_imposed = false;  ///< the reference field was set by set_reference_field()
 };
 
 /// Everything a consumer reads after an update, in one plain struct (AttitudeFilter::output()).
@@ -289,6 +306,22 @@ class AttitudeFilter {
     return st_.have_mag && p_.mag_dist_rejection && !st_.mag_have_ref;
   }
   FilterOutput output() const;
+  /// A reference field (norm, dip in the 6D frame) has been accepted or imposed.
+  bool mag_has_reference() const { return st_.have_mag && st_.mag_have_ref; }
+  double mag_reference_norm_uT() const { return st_.mag_ref_norm; }
+  double mag_reference_dip_rad() const { return st_.mag_ref_dip; }
+  /// The current (smoothed) field's norm, uT, and dip, rad, in the 6D frame.
+  double mag_field_norm_uT() const { return st_.mag_norm_dip[0]; }
+  double mag_field_dip_rad() const { return st_.mag_norm_dip[1]; }
+  /// Imposes the reference field from outside (the rig's consensus, filt::RigFieldConsensus:
+  /// every sensor on one body sees the same earth field). Ends the start-up like an accepted
+  /// reference; if the current field does not match it the sensor is disturbed at once (gyro
+  /// only) and its own candidate must be earned again while rotating. Not per sample: called
+  /// at a low rate, only when the reference differs.
+  void set_reference_field(double norm_uT, double dip_rad);
+  /// The reference was imposed by set_reference_field() (and not replaced since by the
+  /// filter's own acceptance of a new field).
+  bool mag_reference_imposed() const { return st_.ref_imposed; }
   /// Hard-iron offset currently subtracted from the magnetometer, uT (sensor frame).
   Eigen::Vector3d hard_iron_uT() const { return st_.hi_applied_uT; }
   /// Largest one-sigma of the hard-iron estimate over all directions, uT.
@@ -313,6 +346,10 @@ class AttitudeFilter {
   void clear_heading_anchor();
   /// c above, rad (0 without an anchor).
   double anchor_heading_rad() const { return st_.anchor_set ? st_.anchor_heading_rad : 0.0; }
+  /// Heading error kept by the trust anchor (anchor_heading() while the field was untrusted:
+  /// set when the field is first trusted again), rad; pending until then.
+  double anchor_trust_rad() const { return st_.anchor_trust_rad; }
+  bool anchor_trust_pending() const { return st_.anchor_trust_pending; }
 
   FilterState state() const { return st_; }
   void set_state(const FilterState& s);

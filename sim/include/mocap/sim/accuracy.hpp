@@ -47,6 +47,9 @@ struct AccuracyOptions {
   /// Anchor each filter's heading at the N-pose calibration (AttitudeFilter::anchor_heading(),
   /// as the daemon does): a hard-iron offset learnt later does not turn the calibration.
   bool anchor_heading = true;
+  /// Rig consensus of the reference field (filt::RigFieldConsensus, as the daemon): a sensor
+  /// whose reference field differs from the median of the others' gets the median.
+  bool rig_consensus = true;
 };
 
 struct AccuracyResult {
@@ -78,6 +81,10 @@ struct AccuracyResult {
   std::array<double, kSegmentCount> sensor_heading_drift_deg{}, sensor_inclination_rmse_deg{};
   /// Fraction of evaluated frames the filter flagged the sensor's magnetometer as disturbed.
   std::array<double, kSegmentCount> sensor_mag_disturbed_fraction{};
+  /// The filter's reference field was imposed by the rig consensus (at the end), and the
+  /// heading error its trust anchor keeps (AttitudeFilter::anchor_trust_rad), degrees.
+  std::array<bool, kSegmentCount> sensor_ref_imposed{};
+  std::array<double, kSegmentCount> sensor_anchor_trust_deg{};
   int hinges_identified = 0;  ///< knees/elbows whose axis the refinement identified
   std::array<HingeEstimate, kRefinePairs.size()> hinges{};      ///< the refinement's state
   std::array<CouplingHinge, kCouplingPairs.size()> coupling{};  ///< the heading coupling's
