@@ -603,14 +603,12 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       k = 0;
       if (field_deviation2(st_.mag_norm_dip[0], st_.mag_norm_dip[1], rn, rd) <=
           p_.anchor_trust_max_dev) {
-        st_.anchor_trust_sum_rad += err;
+        // Running mean of the field's heading error over the window goes into the anchor
+        // (a field bent at the window's start is averaged out by the clean rest of it).
         ++st_.anchor_trust_n;
+        st_.anchor_trust_rad = wrap_pi(st_.anchor_trust_rad - err / st_.anchor_trust_n);
         st_.anchor_trust_t_s += ts;
-        if (st_.anchor_trust_t_s >= p_.anchor_trust_avg_s) {
-          st_.anchor_trust_rad =
-              wrap_pi(st_.anchor_trust_rad - st_.anchor_trust_sum_rad / st_.anchor_trust_n);
-          st_.anchor_trust_pending = false;
-        }
+        if (st_.anchor_trust_t_s >= p_.anchor_trust_avg_s) st_.anchor_trust_pending = false;
       }
     }
   }
@@ -654,7 +652,6 @@ void AttitudeFilter::anchor_heading() {
   // heading this calibration takes).
   st_.anchor_trust_armed = p_.anchor_trust_avg_s > 0 && (mag_disturbed() || mag_no_reference());
   st_.anchor_trust_pending = st_.anchor_trust_armed;
-  st_.anchor_trust_sum_rad = 0;
   st_.anchor_trust_n = 0;
   st_.anchor_trust_t_s = 0;
   st_.anchor_cal_norm = st_.mag_norm_dip[0];
@@ -693,7 +690,6 @@ void AttitudeFilter::set_reference_field(double norm_uT, double dip_rad) {
     // The calibration's field was taken for the earth's only because this sensor had accepted
     // it as its own reference: it was not; keep the heading the calibration took (update_mag).
     st_.anchor_trust_pending = true;
-    st_.anchor_trust_sum_rad = 0;
     st_.anchor_trust_n = 0;
     st_.anchor_trust_t_s = 0;
   }

@@ -125,12 +125,13 @@ struct FilterParams {
   /// anchor_heading(): largest offset change (x F) taken as present at the anchor.
   double anchor_max_offset = 0.08;
   /// anchor_heading() while the field is untrusted (disturbed or no reference) and not like the
-  /// reference (norm/dip beyond the thresholds): the calibration took a bent heading; it is
-  /// held (gyro only) until the field is trusted; then (within
-  /// anchor_trust_max_dev of the reference, squared deviation in units of the thresholds, as the
-  /// soft trust) its heading error is averaged over anchor_trust_avg_s (heading held) and
-  /// added to the anchor instead of turning the heading. 0 = off (the field corrects it).
-  double anchor_trust_avg_s = 1.0;
+  /// reference (norm/dip beyond the thresholds): the calibration took a bent heading. It is
+  /// held (gyro only) until the field is trusted; then, over anchor_trust_avg_s of trusted
+  /// samples (within anchor_trust_max_dev of the reference: squared deviation in units of the
+  /// thresholds, as the soft trust), the running mean of the field's heading error goes into the
+  /// anchor (heading still held) instead of turning the heading. 0 = off (the field corrects
+  /// it). Long, because a magnet's gradient can bend the direction where norm and dip look right.
+  double anchor_trust_avg_s = 20.0;
   double anchor_trust_max_dev = 0.25;
   // --- magnetometer latency (ours) ---
   /// A magnetometer often samples the motion later than the gyro (longer integration,
@@ -256,7 +257,6 @@ struct FilterState {
   bool anchor_trust_pending = false;
   bool anchor_trust_armed = false;  ///< anchor_heading() was called while untrusted
   double anchor_trust_rad = 0;      ///< heading error kept (added to every measurement)
-  double anchor_trust_sum_rad = 0;  ///< errors summed while averaging
   int anchor_trust_n = 0;
   double anchor_trust_t_s = 0;
   double anchor_cal_norm = 0, anchor_cal_dip = 0;  ///< field (norm uT, dip rad) at the call
