@@ -174,7 +174,7 @@ int run_accuracy(int argc, char** argv) {
       .option("disturbance", "none|magnet|desk|both, comma list or 'all' (default none,both)")
       .option("seed", "random seed (default 1)")
       .option("rate", "sensor rate in Hz (default 100)")
-      .option("heading", "calibration heading source: pelvis|normals|mean|truth (default pelvis)")
+      .option("heading", "calibration heading source: normals|pelvis|mean|truth (default normals)")
       .flag(
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
@@ -210,7 +210,7 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.seed = static_cast<uint64_t>(seed);
-  const std::string heading = args.get_or("heading", "pelvis");
+  const std::string heading = args.get_or("heading", "normals");
   if (heading == "normals")
     base.heading = HeadingSource::mount_normals;
   else if (heading == "mean")
