@@ -109,6 +109,12 @@ sim::SensorModelParams only_errors(const std::string& list, std::string& bad) {
       p.mag_noise_uT = d.mag_noise_uT;
       p.mag_hard_iron_sigma_uT = d.mag_hard_iron_sigma_uT;
       p.mag_scale_sigma = d.mag_scale_sigma;
+    } else if (g == "mag_hard_iron") {
+      p.mag_hard_iron_sigma_uT = d.mag_hard_iron_sigma_uT;
+    } else if (g == "mag_scale") {
+      p.mag_scale_sigma = d.mag_scale_sigma;
+    } else if (g == "mag_noise") {
+      p.mag_noise_uT = d.mag_noise_uT;
     } else if (g == "gyr") {
       p.gyr_noise_density_dps_rthz = d.gyr_noise_density_dps_rthz;
       p.gyr_bias_sigma_dps = d.gyr_bias_sigma_dps;
@@ -174,12 +180,14 @@ int run_accuracy(int argc, char** argv) {
       .option("disturbance", "none|magnet|desk|both, comma list or 'all' (default none,both)")
       .option("seed", "random seed (default 1)")
       .option("rate", "sensor rate in Hz (default 100)")
-      .option("heading", "calibration heading source: normals|pelvis|mean|truth (default normals)")
+      .option("heading", "calibration heading source: pelvis|normals|mean|truth (default pelvis)")
       .flag(
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
       .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
+      .option("anchor",
+              "filter heading anchored at the calibration: on|off (default on, as the daemon)")
       .option("coupling-param",
               "HeadingCouplingOptions overrides, comma list of name=value "
               "(tau_s, min_flex_deg, min_axis_horizontal, "
@@ -192,7 +200,7 @@ int run_accuracy(int argc, char** argv) {
               "min_parent_off_axis_deg)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
-              "(error breakdown; default all)")
+              "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)")
       .flag("ideal", "ideal sensors (no noise, bias, misalignment): isolates the pipeline")
       .flag("markdown", "also print a markdown table on stderr");
   if (!args.parse(argc, argv, 1)) {
@@ -210,7 +218,7 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.seed = static_cast<uint64_t>(seed);
-  const std::string heading = args.get_or("heading", "normals");
+  const std::string heading = args.get_or("heading", "pelvis");
   if (heading == "normals")
     base.heading = HeadingSource::mount_normals;
   else if (heading == "mean")
@@ -229,6 +237,12 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.heading_coupling.enabled = coupling == "on";
+  const std::string anchor = args.get_or("anchor", "on");
+  if (anchor != "on" && anchor != "off") {
+    std::fprintf(stderr, "mocap bench accuracy: --anchor must be on or off\n");
+    return 2;
+  }
+  base.anchor_heading = anchor == "on";
   HeadingCouplingOptions& c = base.heading_coupling;
   if (!set_params(args.get_or("coupling-param", ""), "coupling-param",
                   {{"tau_s", &c.tau_s},

@@ -102,6 +102,10 @@ void RigEngine::on_sample(int i, const ImuSample& s) {
       calib_message_ = r.message;
       if (r.ok()) {
         skeleton_.set_calibration(r.calibration);
+        // The calibration absorbed each filter's heading error of this moment (hard-iron
+        // residual): keep it when the offset is learnt later (docs/filter.md).
+        for (AttitudeFilter& af : filters_)
+          af.anchor_heading();
         save_calibration_file(s.t_host_ns);
         if (log_) log_->info("calibration done: %s", r.message.c_str());
       } else if (log_) {

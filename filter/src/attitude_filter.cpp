@@ -81,6 +81,7 @@ void AttitudeFilter::refresh_coeffs() {
   c_.hard_iron.gate_rel2 = sq(p_.hard_iron_gate);
   c_.hard_iron.min_offset_rel = p_.hard_iron_min_offset;
   c_.hard_iron.min_sigmas = p_.hard_iron_min_sigmas;
+  c_.hard_iron.min_sigmas_consistent = p_.hard_iron_consistent_min_sigmas;
   c_.hard_iron.k_nis =
       filt::gain_from_tau(p_.hard_iron_nis_tau_s, c_.hard_iron_decim * c_.mag_ts_s);
   c_.hard_iron.nis_max = p_.hard_iron_nis_max;
@@ -387,27 +388,42 @@ double AttitudeFilter::field_deviation2(double norm, double dip, double ref_norm
 }
 
 // Applies the gated offset only while it explains a disturbance: the squared norm/dip
-// deviations from the reference (relative to the thresholds) without and with it.
+// deviations from the reference (relative to the thresholds) without and with it; or, with a
+// lower significance, while the estimator's innovations have stayed consistent.
 void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
                                       const Eigen::Vector3d& m_corr_e) {
+  const filt::HardIronEstimator& h = st_.hard_iron;
+  bool consistent = false;
+  if (p_.hard_iron_consistent_nis > 0) {
+    if (h.restarts != st_.hi_restarts_seen || !(h.nis < p_.hard_iron_consistent_nis))
+      st_.hi_consistent_s = 0;
+    else
+      st_.hi_consistent_s += c_.hard_iron_decim * c_.mag_ts_s;
+    st_.hi_restarts_seen = h.restarts;
+    consistent = st_.mag_ref_norm > 0 && st_.hi_consistent_s >= p_.hard_iron_consistent_s;
+  }
   if (p_.hard_iron_select_margin <= 0) {
     st_.hi_weight = 1;
-    return;
-  }
-  if (st_.mag_ref_norm <= 0 || st_.hard_iron.used_uT.isZero()) {
+  } else if (st_.mag_ref_norm <= 0 || h.used_uT.isZero()) {
     // Nothing to compare with before a reference field exists (a field that varies around
     // a magnet at start-up must not be "explained" by an offset), or nothing to apply.
     st_.hi_select = 0;
     st_.hi_weight = 0;
-    return;
+  } else {
+    auto score = [&](const Eigen::Vector3d& m) {
+      const double n = m.norm();
+      if (!(n > 0)) return 0.0;
+      return std::min(field_deviation2(n, dip_rad(m, n), st_.mag_ref_norm, st_.mag_ref_dip), 25.0);
+    };
+    st_.hi_select += c_.k_hard_iron_select * (score(m_raw_e) - score(m_corr_e) - st_.hi_select);
+    st_.hi_weight = std::clamp(st_.hi_select / p_.hard_iron_select_margin, 0.0, 1.0);
   }
-  auto score = [&](const Eigen::Vector3d& m) {
-    const double n = m.norm();
-    if (!(n > 0)) return 0.0;
-    return std::min(field_deviation2(n, dip_rad(m, n), st_.mag_ref_norm, st_.mag_ref_dip), 25.0);
-  };
-  st_.hi_select += c_.k_hard_iron_select * (score(m_raw_e) - score(m_corr_e) - st_.hi_select);
-  st_.hi_weight = std::clamp(st_.hi_select / p_.hard_iron_select_margin, 0.0, 1.0);
+  st_.hi_applied_uT = st_.hi_weight * h.used_uT;
+  st_.hi_applied_consistent = false;
+  if (consistent && h.used_consistent_uT.norm() > st_.hi_applied_uT.norm()) {
+    st_.hi_applied_uT = h.used_consistent_uT;
+    st_.hi_applied_consistent = true;
+  }
 }
 
 void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
@@ -428,6 +444,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       st_.hi_n = 0;
       st_.hi_dt_s = 0;
       select_hard_iron(r6 * m_c, r6 * (m_c - st_.hard_iron.used_uT));
+      update_anchor();
     }
   }
   const Eigen::Vector3d mag = mag_raw - hard_iron_uT();
@@ -497,7 +514,9 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     }
   }
 
-  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
+  // Heading measurement; an anchor adds back what the offset learnt since caused at the
+  // anchor pose, so at that pose learning it changes nothing.
+  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) + st_.anchor_heading_rad - st_.delta_rad);
   if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
     // Gyro-consistency: the field in the almost-inertial frame must stay put.
     const Eigen::Vector3d m_i = st_.q_gyr * mag;
@@ -593,6 +612,47 @@ Eigen::Quaterniond AttitudeFilter::q_earth_sensor_6d() const {
 Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
   if (!st_.have_mag) return st_.q_acc * st_.q_gyr;
   return st_.q_delta * (st_.q_acc * st_.q_gyr);
+}
+
+void AttitudeFilter::anchor_heading() {
+  st_.anchor_set = true;
+  st_.q_anchor = st_.q_delta * (st_.q_acc * st_.q_gyr);
+  st_.anchor_offset_uT = hard_iron_uT();
+  st_.anchor_restarts = st_.hard_iron.restarts;
+  st_.anchor_heading_rad = 0;
+}
+
+void AttitudeFilter::clear_heading_anchor() {
+  st_.anchor_set = false;
+  st_.anchor_heading_rad = 0;
+}
+
+// The offset learnt since the anchor, b_new - b_anchor, was still in the field when the
+// anchor was taken: there it added q_anchor (b_new - b_anchor) to the earth-frame field and
+// turned the heading by the change of atan2(m_x, m_y) (the heading measurement).
+void AttitudeFilter::update_anchor() {
+  if (!st_.anchor_set) return;
+  const double f = st_.mag_ref_norm > 0 ? st_.mag_ref_norm : st_.hard_iron.f_uT;
+  const double dip = st_.mag_ref_norm > 0 ? st_.mag_ref_dip : 0.0;
+  const double fh = f * std::cos(dip);
+  if (!(fh > 0)) return;
+  if (st_.hard_iron.restarts != st_.anchor_restarts) {
+    // The estimator restarted (the model broke: a magnet, a gradient): what it had learnt is
+    // forgotten, so is the correction derived from it; the anchor stays inert from here on.
+    st_.anchor_heading_rad = 0;
+    return;
+  }
+  const Eigen::Vector3d db = hard_iron_uT() - st_.anchor_offset_uT;
+  // Only a residual-sized offset can have been present unnoticed at the anchor; a larger one
+  // (a magnet attached since, a field gradient taken as an offset) leaves c as it was.
+  // An offset applied because it explains a norm/dip deviation from the reference field
+  // appeared after that reference was taken (the reference included the residual present at
+  // start-up): only the consistent path's offset is taken as present at the anchor.
+  if (!st_.hi_applied_consistent || db.norm() > p_.anchor_max_offset * f || mag_disturbed()) return;
+  const Eigen::Vector3d v = st_.q_anchor * db;
+  const double c = std::atan2(v.x(), fh + v.y());
+  if (!std::isfinite(c)) return;
+  st_.anchor_heading_rad = c;
 }
 
 double AttitudeFilter::heading_sigma_rad() const {

@@ -129,6 +129,9 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       r.calibrated = true;
       skeleton.set_calibration(cr.calibration);
       npose_calibration = cr.calibration;
+      if (o.anchor_heading)
+        for (AttitudeFilter& f : filters)
+          f.anchor_heading();
       perf.truth_at(k * frame_s, truth);
       skeleton.root_motion().reset(truth.p_earth_segment_m[0]);
       prev_true_root = truth.p_earth_segment_m[0];

@@ -112,10 +112,18 @@ struct FilterParams {
   /// hard_iron_select_margin. 0 = always applied once gated.
   double hard_iron_select_tau_s = 1.0;
   double hard_iron_select_margin = 0.2;
+  /// ... or while the estimator's innovations have stayed consistent (averaged NIS below
+  /// hard_iron_consistent_nis, no restart) for hard_iron_consistent_s: a residual offset too
+  /// small to show in the norm/dip still turns the heading with the orientation. 0 = off.
+  double hard_iron_consistent_nis = 0.2;
+  double hard_iron_consistent_s = 10.0;
+  double hard_iron_consistent_min_sigmas = 0.5;  ///< significance required on that path
   /// While an offset is applied its remaining uncertainty (one-sigma over the horizontal
   /// field, as a heading angle) relative to heading_sigma_deg, squared and times this weight,
   /// adds to the heading's soft-trust score: the heading follows a corrected field more slowly.
   double hard_iron_trust_weight = 0.0;  // off: slower heading costs more (gyro drift) on BROAD
+  /// anchor_heading(): largest offset change (x F) taken as present at the anchor.
+  double anchor_max_offset = 0.08;
   // --- magnetometer latency (ours) ---
   /// A magnetometer often samples the motion later than the gyro (longer integration,
   /// internal filters): during fast rotation its heading then lags. The latency is
@@ -222,10 +230,20 @@ struct FilterState {
   bool mag_i_init = false;
   // hard-iron offset
   filt::HardIronEstimator hard_iron;
-  int hi_n = 0;          ///< magnetometer samples since the last estimator step
-  double hi_dt_s = 0;    ///< and their time
-  double hi_select = 0;  ///< low-passed score difference without / with the offset
-  double hi_weight = 0;  ///< weight of the offset applied (0..1)
+  int hi_n = 0;                ///< magnetometer samples since the last estimator step
+  double hi_dt_s = 0;          ///< and their time
+  double hi_select = 0;        ///< low-passed score difference without / with the offset
+  double hi_weight = 0;        ///< weight of the offset applied (0..1)
+  double hi_consistent_s = 0;  ///< time the estimator's innovations have stayed consistent
+  int hi_restarts_seen = 0;    ///< its restart count then
+  Eigen::Vector3d hi_applied_uT = Eigen::Vector3d::Zero();  ///< offset subtracted
+  bool hi_applied_consistent = false;                       ///< ... by the consistency path
+  // heading anchor (anchor_heading(): a calibration was taken at this moment)
+  bool anchor_set = false;
+  Eigen::Quaterniond q_anchor = Eigen::Quaterniond::Identity();  ///< 9D orientation then
+  Eigen::Vector3d anchor_offset_uT = Eigen::Vector3d::Zero();    ///< offset applied then
+  double anchor_heading_rad = 0;  ///< heading the offset learnt since caused at q_anchor
+  int anchor_restarts = 0;        ///< estimator restarts then (a restart since: new offset)
 };
 
 /// Everything a consumer reads after an update, in one plain struct (AttitudeFilter::output()).
@@ -272,7 +290,7 @@ class AttitudeFilter {
   }
   FilterOutput output() const;
   /// Hard-iron offset currently subtracted from the magnetometer, uT (sensor frame).
-  Eigen::Vector3d hard_iron_uT() const { return st_.hi_weight * st_.hard_iron.used_uT; }
+  Eigen::Vector3d hard_iron_uT() const { return st_.hi_applied_uT; }
   /// Largest one-sigma of the hard-iron estimate over all directions, uT.
   double hard_iron_sigma_uT() const { return st_.hard_iron.offset_sigma_uT(); }
   Eigen::Vector3d gyro_bias_rad_s() const { return st_.bias_rad_s; }
@@ -281,6 +299,20 @@ class AttitudeFilter {
   Eigen::Matrix3d gyro_gain() const;
   /// One-sigma heading uncertainty of the 9D output, rad (large before any magnetometer).
   double heading_sigma_rad() const;
+
+  /// Heading anchor for a consumer that has just taken a calibration from this filter's
+  /// orientation (N-pose): that calibration absorbed the heading error the magnetometer's
+  /// then-unknown hard-iron offset caused in this pose. When the offset is learnt later the
+  /// heading becomes right and the calibration wrong by that error; from this call on the
+  /// 9D heading keeps it: c = the heading error the offset learnt since this call causes at
+  /// this call's orientation is added to every heading measurement (a constant for a constant
+  /// offset, so orientation-dependent errors are still removed; at the anchor pose learning
+  /// the offset changes nothing). Only the residual path's offset, not while disturbed, not
+  /// above anchor_max_offset; an estimator restart drops c. Calling it again re-anchors.
+  void anchor_heading();
+  void clear_heading_anchor();
+  /// c above, rad (0 without an anchor).
+  double anchor_heading_rad() const { return st_.anchor_set ? st_.anchor_heading_rad : 0.0; }
 
   FilterState state() const { return st_; }
   void set_state(const FilterState& s);
@@ -292,6 +324,7 @@ class AttitudeFilter {
   void update_gyr(const Eigen::Vector3d& gyr, double dt_s);
   void update_acc(const Eigen::Vector3d& acc, double dt_s);
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
+  void update_anchor();
   void select_hard_iron(const Eigen::Vector3d& m_raw_e, const Eigen::Vector3d& m_corr_e);
   /// Squared deviation of a field (norm, dip) from a reference, in units of the disturbance
   /// thresholds (mag_norm_th, mag_dip_th_deg).

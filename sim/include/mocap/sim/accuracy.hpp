@@ -44,6 +44,9 @@ struct AccuracyOptions {
   /// The calibration procedure includes the calibration moves (knee bends with elbow curls,
   /// make_motion("calibrate+<motion>")) after the N-pose; the evaluation starts after them.
   bool calibration_moves = false;
+  /// Anchor each filter's heading at the N-pose calibration (AttitudeFilter::anchor_heading(),
+  /// as the daemon does): a hard-iron offset learnt later does not turn the calibration.
+  bool anchor_heading = true;
 };
 
 struct AccuracyResult {

@@ -59,6 +59,8 @@ class Performer {
   static int sensor_of(Segment s);
 
   const SensorMount& mount(int sensor_id) const { return mounts_[sensor_id]; }
+  /// One sensor's drawn errors (biases, hard iron): truth for diagnostics.
+  const SensorErrorModel& sensor_errors(int sensor_id) const { return errors_[sensor_id]; }
   const BodyDimensions& dims() const { return dims_; }
   const PerformerParams& params() const { return params_; }
   const MotionTrack& track() const { return track_; }

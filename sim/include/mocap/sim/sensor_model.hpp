@@ -110,6 +110,8 @@ class SensorErrorModel {
   double gauss() { return normal_(rng_); }
   double uniform() { return uniform_(rng_); }
   const Eigen::Vector3d& gyr_bias_rad_s() const { return gyr_bias_rad_s_; }
+  /// The drawn hard-iron residual (sensor frame, uT): truth for filter diagnostics.
+  const Eigen::Vector3d& mag_offset_uT() const { return mag_offset_uT_; }
 
  private:
   Eigen::Vector3d noise3(double sigma);
