@@ -117,8 +117,12 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
     }
     refiner_.add(q_base, t_in_ns_, fresh, t_now_ns);
     if (refiner_.update(t_now_ns)) {
+      const Calibration previous = calib_;
       calib_ = HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(),
                                        refiner_.common_yaw_rad());
+      // One estimator: the coupling's offsets are re-estimated under the new mountings, so
+      // the two never both absorb the same constant (heading_coupling.hpp).
+      if (opt_.heading_coupling.enabled) coupling_.rebase(previous, calib_);
       ++calib_revision_;
       for (int i = 0; i < kSegmentCount; ++i)
         if (live[i]) q_earth_[i] = calib_.segment_from_sensor(i, q_es_[i]);

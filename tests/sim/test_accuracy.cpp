@@ -86,6 +86,39 @@ TEST(Accuracy, SquatAfterCalibrationMoves) {
   }
 }
 
+TEST(Accuracy, HingeResultsDoNotDependOnTheCalibrationHeadingSource) {
+  // The refined calibration is the same with either heading source; the heading coupling's
+  // offsets are re-estimated under it whenever it changes (HeadingCoupling::rebase), so the
+  // knees and elbows are too. Before, the coupling kept what it learnt under the N-pose
+  // calibration: squat after the moves, seed 4, 1.92 (pelvis) vs 2.16 deg (mount normals).
+  AccuracyOptions o;
+  o.motion = "squat";
+  o.seed = 4;
+  o.calibration_moves = true;
+  const AccuracyResult pelvis = run_accuracy(o);
+  o.heading = HeadingSource::mount_normals;
+  const AccuracyResult normals = run_accuracy(o);
+  ASSERT_TRUE(pelvis.calibrated && normals.calibrated) << normals.calibration_message;
+  record(normals);
+  EXPECT_NEAR(normals.hinge_max_rmse_deg, pelvis.hinge_max_rmse_deg, 0.02);
+  EXPECT_LE(normals.hinge_max_rmse_deg, 2.0);  // target, met (measured 1.70 with either)
+}
+
+TEST(Accuracy, SquatWithMountNormalsHeading) {
+  // N-pose only (no calibration moves), seed 5: with the pelvis belt clip as the heading the
+  // squat misses both targets (4.86 / 4.77 deg); with the mount normals both are met: measured
+  // 1.47 / 1.73.
+  AccuracyOptions o;
+  o.motion = "squat";
+  o.seed = 5;
+  o.heading = HeadingSource::mount_normals;
+  const AccuracyResult r = run_accuracy(o);
+  ASSERT_TRUE(r.calibrated) << r.calibration_message;
+  record(r);
+  EXPECT_LE(r.hinge_max_rmse_deg, 2.0);
+  EXPECT_LE(r.three_dof_max_rmse_deg, 3.0);
+}
+
 TEST(Accuracy, TurnAfterCalibrationMoves) {
   // The knees' and elbows' yaw offsets found as the exact minimum of the hinge fit (not the
   // nearest node of a 0.05 deg grid window, which snapped to points degrees apart along the
@@ -109,10 +142,10 @@ TEST(Accuracy, ArmRaiseThroughNinetyDegreesWithRealisticSensors) {
   ASSERT_TRUE(r.calibrated) << r.calibration_message;
   EXPECT_GT(r.frames, 1000);
   record(r);
-  // Measured 2.68 / 2.10 deg (seed 1): 3-DOF meets its target for seed 1 (seeds 1..5: up to
-  // 4.63); the elbow misses (mounting yaw left by the elbow curls, docs/accuracy.md):
-  // regression guard only.
-  EXPECT_LE(r.hinge_max_rmse_deg, 3.35);
+  // Measured 2.53 / 2.08 deg (seed 1; 2.79 before the coupling was re-estimated under the
+  // refined calibration): 3-DOF meets its target for seed 1 (seeds 1..5: up to 4.63); the elbow
+  // misses (mounting yaw left by the elbow curls, docs/accuracy.md): regression guard only.
+  EXPECT_LE(r.hinge_max_rmse_deg, 3.2);
   EXPECT_LE(r.three_dof_max_rmse_deg, 3.0);
   for (int s = 0; s < kSegmentCount; ++s)
     EXPECT_TRUE(std::isfinite(r.segment_rmse_deg[s]));

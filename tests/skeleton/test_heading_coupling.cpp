@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "mocap/skeleton/heading_coupling.hpp"
+#include "mocap/skeleton/hinge_calibration.hpp"
 #include "mocap/skeleton/quat_math.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 #include "skeleton_test_util.hpp"
@@ -145,6 +146,68 @@ TEST(HeadingCoupling, SkeletonAppliesItToTheKnee) {
   sk.reset_heading();
   EXPECT_EQ(sk.heading_coupling().hinges()[1].offset_deg, 0.0);
   EXPECT_EQ(sk.heading_coupling().correction_rad()[kShank], 0.0);
+}
+
+/// Feeds `seconds` of the flexing knee (shank sensor's earth frame turned by 8 deg) through
+/// calibration `cal` into `c`, starting at sample k0.
+void feed(HeadingCoupling& c, const Calibration& cal, int k0, double seconds) {
+  std::array<Eigen::Quaterniond, kSegmentCount> q;
+  q.fill(Eigen::Quaterniond::Identity());
+  std::array<bool, kSegmentCount> have{}, disturbed{};
+  have[kThigh] = have[kShank] = true;
+  const Eigen::Quaterniond off = yaw_rotation(8.0 * kDegToRad);
+  for (int k = k0; k <= k0 + static_cast<int>(seconds * 100); ++k) {
+    const Leg leg = true_leg(k * 0.01, 1.5);
+    q[kThigh] = cal.segment_from_sensor(kThigh, leg.thigh);
+    q[kShank] = cal.segment_from_sensor(kShank, off * leg.shank);
+    c.update(q, have, disturbed, static_cast<int64_t>(k) * 10 * kMs);
+  }
+}
+
+TEST(HeadingCoupling, RebaseForgetsWhatAnEarlierMountingTaught) {
+  // The true mountings are identity. For 4 s the shank's mounting is 10 deg off in yaw (the
+  // N-pose's, before the refinement identified the knee); then the refinement corrects it.
+  Calibration truth;
+  truth.valid = true;
+  truth.calibrated.fill(true);
+  std::array<double, kSegmentCount> alpha{};
+  alpha[kShank] = 10.0 * kDegToRad;
+  const Calibration wrong = HingeAxisRefiner::apply(truth, alpha, 0.0);
+  const HeadingCouplingOptions o{.enabled = true};
+  // Reference: the true mounting from the start.
+  HeadingCoupling ref(RigMapping::full(), o);
+  feed(ref, truth, 0, 5.0);
+  // Wrong mounting for 4 s, then rebased onto the truth and fed 1 s more.
+  HeadingCoupling one(RigMapping::full(), o);
+  feed(one, wrong, 0, 4.0);
+  one.rebase(wrong, truth);
+  feed(one, truth, 401, 0.99);
+  EXPECT_NEAR(one.hinges()[1].offset_deg, ref.hinges()[1].offset_deg, 1e-6);
+  EXPECT_NEAR(one.hinges()[1].observed_s, ref.hinges()[1].observed_s, 1e-9);
+  // Without the history the offset keeps the wrong mounting's share.
+  HeadingCouplingOptions no_hist = o;
+  no_hist.history_samples = 0;
+  HeadingCoupling stale(RigMapping::full(), no_hist);
+  feed(stale, wrong, 0, 4.0);
+  stale.rebase(wrong, truth);
+  feed(stale, truth, 401, 0.99);
+  EXPECT_GT(std::abs(stale.hinges()[1].offset_deg - ref.hinges()[1].offset_deg), 0.3);
+}
+
+TEST(HeadingCoupling, HistoryWindowDropsTheOldestIntoTheBaseState) {
+  // A window shorter than the run: rebase with no calibration change reproduces the running
+  // estimate exactly (the dropped frames were folded in, the kept ones replayed).
+  HeadingCouplingOptions o{.enabled = true};
+  o.history_samples = 300;
+  Calibration cal;
+  cal.valid = true;
+  cal.calibrated.fill(true);
+  HeadingCoupling c(RigMapping::full(), o);
+  feed(c, cal, 0, 30.0);
+  const double before = c.hinges()[1].offset_deg;
+  EXPECT_NEAR(before, 8.0, 0.3);
+  c.rebase(cal, cal);
+  EXPECT_NEAR(c.hinges()[1].offset_deg, before, 1e-9);
 }
 
 }  // namespace heading_coupling_test

@@ -29,14 +29,28 @@
 // heading ahead of its first reference field is flagged separately (no_reference) and not treated
 // as disturbed.
 //
-// Pure, deterministic, allocation-free; one instance per skeleton, reset with the calibration.
+// One estimator with the calibration: the coupling's offset is a heading offset between two
+// sensors' filters *given* the mountings; the hinge refinement (HingeAxisRefiner) estimates the
+// constant mounting yaws. An offset learnt under an earlier calibration (the N-pose's, before the
+// refinement identified the hinge) would keep part of the mounting error the refinement has since
+// removed, so both would absorb the same constant. Each hinge therefore keeps its recent
+// candidate frames (joint flexed by >= candidate_flex_fraction * min_flex_deg; the last
+// history_samples of them); when the calibration changes, rebase() maps them into the new
+// calibration and re-runs the estimate over them from the state before the oldest kept frame,
+// so the offset is always the one the current calibration would have produced (up to the
+// exp(-window / tau_s) weight of the frames dropped from the window).
+//
+// Pure, deterministic; one instance per skeleton, reset with the calibration. The history is
+// allocated once at construction; update() and rebase() do not allocate.
 #pragma once
 
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "mocap/core/segments.hpp"
+#include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/rig.hpp"
 
 namespace mocap {
@@ -55,6 +69,12 @@ struct HeadingCouplingOptions {
   /// The child's correction also turns the segment beyond it (foot, hand), so the 3-DOF ankle
   /// and wrist keep what the filters measured.
   bool carry_distal = true;
+  /// Candidate frames kept per hinge for rebase() (0: no history, an offset keeps what it learnt
+  /// under earlier calibrations). 2048 at 100 Hz is ~7 tau_s of flexed time.
+  int history_samples = 2048;
+  /// A frame is kept when the joint angle is at least this fraction of min_flex_deg (a
+  /// calibration change moves the angle by a few degrees; the replay applies the exact gate).
+  double candidate_flex_fraction = 0.5;
 };
 
 /// One hinge's state (diagnostics, tests).
@@ -101,10 +121,27 @@ class HeadingCoupling {
   Eigen::Quaterniond apply(int segment, const Eigen::Quaterniond& q_earth_segment) const;
   const std::array<CouplingHinge, kCouplingPairs.size()>& hinges() const { return hinge_; }
   const HeadingCouplingOptions& options() const { return opt_; }
+  /// The calibration the orientations passed to update() use changed from `from` to `to` (the
+  /// hinge refinement's update): maps the kept frames into `to` and re-estimates each hinge's
+  /// offset over them (see the top of this file). Allocation-free.
+  void rebase(const Calibration& from, const Calibration& to);
 
  private:
+  struct Frame {
+    Eigen::Quaterniond q_parent, q_child;  ///< calibrated orientations (current calibration)
+    double dt_s;
+  };
+  /// One step of the offset estimate (offset_rad, state st) from one frame; true if observable.
+  bool step(const Eigen::Quaterniond& q_parent, const Eigen::Quaterniond& q_child, double dt_s,
+            double& offset_rad, CouplingHinge& st) const;
+  void push(size_t hinge, const Frame& f);
+
   RigMapping rig_;
   HeadingCouplingOptions opt_;
+  std::vector<Frame> hist_;                                  ///< per hinge: a ring of capacity
+  std::array<size_t, kCouplingPairs.size()> hist_head_{};    ///< oldest kept frame
+  std::array<size_t, kCouplingPairs.size()> hist_size_{};    ///< frames kept
+  std::array<CouplingHinge, kCouplingPairs.size()> base_{};  ///< state before the oldest frame
   std::array<double, kSegmentCount> corr_{};
   std::array<double, kSegmentCount> trust_{};
   std::array<CouplingHinge, kCouplingPairs.size()> hinge_{};
