@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "mocap/core/segments.hpp"
+#include "mocap/core/units.hpp"
 #include "mocap/filter/filter_param_names.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
@@ -91,7 +92,14 @@ void RigEngine::on_sample(int i, const ImuSample& s) {
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
   // Every sensor of the body sees the same earth field: a reference that differs from the
   // others' median (a magnet beside it at start-up) is replaced (low rate, docs/filter.md).
-  if (cfg_.filter.use_mag) consensus_.step(newest_t_ns_, filters_);
+  if (cfg_.filter.use_mag) {
+    const int replaced = consensus_.step(newest_t_ns_, filters_);
+    if (replaced > 0 && log_)
+      log_->warn(
+          "%d sensor(s) took a reference field unlike the rig's (%.1f uT, dip %.1f deg): "
+          "replaced by the rig's (a magnet or steel nearby at start-up?)",
+          replaced, consensus_.norm_uT(), consensus_.dip_rad() / kRadPerDeg);
+  }
   const int seg = segment_of_[i];
   if (seg < 0) return;
   const Eigen::Quaterniond q = cfg_.filter.use_mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();

@@ -1,7 +1,9 @@
 // The magnetometer states a frame reports per segment and sensor: during the filters' start-up
 // every tracked segment says "no reference field yet" (kSegMagNoReference), not "disturbed";
 // once the standing, then walking, virtual performer has given each filter a consistent field,
-// no segment says either. The performer's samples go through the real RigEngine.
+// no segment says either. With a magnet beside the right hip at the start position, the rig's
+// consensus gives the sensors beside it the earth field's reference that the others agree on.
+// The performer's samples go through the real RigEngine.
 #include <gtest/gtest.h>
 
 #include "mocap/daemon/config.hpp"
@@ -11,10 +13,11 @@
 namespace mocap::daemon {
 namespace {
 
-TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
+std::optional<Config> performer_rig() {
   ConfigErrors errs;
   std::optional<Config> cfg = parse_config("", "<defaults>", {}, errs);
-  ASSERT_TRUE(cfg) << errs.to_string();
+  EXPECT_TRUE(cfg) << errs.to_string();
+  if (!cfg) return cfg;
   for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
     SensorConfig s;
     s.name = std::string(sim::Performer::sensor_name(i));
@@ -22,6 +25,12 @@ TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
     s.driver = "direct";
     cfg->sensors.push_back(s);
   }
+  return cfg;
+}
+
+TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
+  std::optional<Config> cfg = performer_rig();
+  ASSERT_TRUE(cfg);
   sim::PerformerParams pp;
   pp.motion = "walk";
   sim::Performer perf(pp);
@@ -58,6 +67,35 @@ TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
   EXPECT_EQ(count(kSegMagDisturbed), 0);
   for (int i = 0; i < sim::Performer::kSensorCount; ++i)
     EXPECT_FALSE(engine.sensor_state(i).mag_no_reference) << i;
+}
+
+TEST(DaemonMagFlags, MagnetAtTheStartGetsTheRigsReference) {
+  std::optional<Config> cfg = performer_rig();
+  ASSERT_TRUE(cfg);
+  sim::PerformerParams pp;
+  pp.motion = "walk";
+  pp.field.dipoles = sim::disturbance_preset("magnet", pp.height_m);
+  sim::Performer perf(pp);
+  RigEngine engine(*cfg);
+  std::vector<ImuSample> samples;
+  for (int k = 1; k <= 1000; ++k) {  // 10 s at 100 Hz: standing, then walking away
+    samples.clear();
+    perf.step_to(static_cast<int64_t>(k) * 10'000'000, samples);
+    for (const ImuSample& s : samples)
+      engine.on_sample(s.sensor_id, s);
+  }
+  const double earth_uT = pp.field.earth_field_uT().norm();
+  int imposed = 0;
+  for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
+    const AttitudeFilter& f = engine.filter(i);
+    // Every filter ends with the earth field's norm as its reference ...
+    EXPECT_NEAR(f.mag_reference_norm_uT(), earth_uT, 0.1 * earth_uT)
+        << sim::Performer::sensor_name(i);
+    imposed += f.mag_reference_imposed();
+  }
+  // ... some of them because the rig imposed it (they started beside the magnet), not all.
+  EXPECT_GE(imposed, 1);
+  EXPECT_LE(imposed, sim::Performer::kSensorCount / 2);
 }
 
 }  // namespace
