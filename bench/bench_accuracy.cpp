@@ -201,7 +201,7 @@ int run_accuracy(int argc, char** argv) {
       .option("refine-param",
               "HingeRefineOptions overrides, comma list of name=value (min_travel_deg, "
               "max_yaw_deg, min_rate_deg_s, via_still_fraction, "
-              "min_parent_off_axis_deg)")
+              "min_parent_off_axis_deg, basin_margin)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
               "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)")
@@ -270,7 +270,8 @@ int run_accuracy(int argc, char** argv) {
                    {"max_yaw_deg", &h.max_yaw_deg},
                    {"min_rate_deg_s", &h.min_rate_deg_s},
                    {"via_still_fraction", &h.via_still_fraction},
-                   {"min_parent_off_axis_deg", &h.min_parent_off_axis_deg}}))
+                   {"min_parent_off_axis_deg", &h.min_parent_off_axis_deg},
+                   {"basin_margin", &h.basin_margin}}))
     return 2;
   if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");

@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -40,6 +41,7 @@ void HingeAxisRefiner::reset() {
   sums_.fill(Sums{});
   est_.fill(HingeEstimate{});
   n_estimated_.fill(0);
+  applied_.fill(false);
   q_prev_.fill(Eigen::Quaterniond::Identity());
   t_prev_ns_.fill(0);
   have_prev_.fill(false);
@@ -126,17 +128,18 @@ void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& 
   }
 }
 
-bool HingeAxisRefiner::estimate(int hinge, HingeEstimate& out) const {
+bool HingeAxisRefiner::estimate(int hinge, double ref_yaw_p, double ref_yaw_c, double margin,
+                                HingeEstimate& out) const {
   const Sums& s = sums_[hinge];
   out.travel_deg = s.travel_rad * kRadToDeg;
   if (s.n < 10 || s.scale <= 0) return false;
   const double range = opt_.max_yaw_deg * kDegToRad;
-  double bp = 0, bc = 0;
-  const double best = minimize(s, range, false, bp, bc);
+  const YawFit f = fit(s.h, s.g, s.s, range, false, 0, ref_yaw_p, ref_yaw_c, margin);
+  const double bp = f.yaw_p, bc = f.yaw_c;
   out.parent_yaw_deg = bp * kRadToDeg;
   out.child_yaw_deg = bc * kRadToDeg;
   out.applied_child_yaw_deg = out.child_yaw_deg;
-  out.rms_residual = std::sqrt(std::max(best, 0.0) / s.scale);
+  out.rms_residual = std::sqrt(std::max(f.cost, 0.0) / s.scale);
   out.parent_travel_deg = s.parent_travel_rad * kRadToDeg;
   const double edge = range - 0.5 * kDegToRad;
   const bool ok = out.travel_deg >= opt_.min_travel_deg && std::abs(bc) < edge;
@@ -145,79 +148,143 @@ bool HingeAxisRefiner::estimate(int hinge, HingeEstimate& out) const {
   return ok;
 }
 
-double HingeAxisRefiner::minimize(const Sums& s, double range, bool parent_fixed, double& yaw_p,
-                                  double& yaw_c) {
+HingeAxisRefiner::YawFit HingeAxisRefiner::fit(const Eigen::Matrix4d& h, const Eigen::Vector4d& g,
+                                               double s, double range, bool parent_fixed,
+                                               double fixed_yaw_p, double ref_yaw_p,
+                                               double ref_yaw_c, double basin_margin) {
   // cost(y) = x^T H x + 2 g^T x + s with x = (cos fp, sin fp, cos fc, sin fc), f = 2 (phi + y).
-  const auto xvec = [](double yp, double yc) {
-    const double fp = 2 * (kAxisPhi + yp), fc = 2 * (kAxisPhi + yc);
-    return Eigen::Vector4d(std::cos(fp), std::sin(fp), std::cos(fc), std::sin(fc));
+  const auto half = [](double y) {
+    const double f = 2 * (kAxisPhi + y);
+    return Eigen::Vector2d(std::cos(f), std::sin(f));
   };
   const auto cost = [&](double yp, double yc) {
-    const Eigen::Vector4d x = xvec(yp, yc);
-    return x.dot(s.h * x) + 2 * s.g.dot(x) + s.s;
+    Eigen::Vector4d x;
+    x << half(yp), half(yc);
+    return x.dot(h * x) + 2 * g.dot(x) + s;
   };
-  // Coarse grid (1 deg) for the basin of the global minimum ...
-  double best = std::numeric_limits<double>::infinity();
-  const double fixed_p = yaw_p;
-  const int n_grid = static_cast<int>(std::floor(range * kRadToDeg));
-  for (int i = parent_fixed ? 0 : -n_grid; i <= (parent_fixed ? 0 : n_grid); ++i) {
-    for (int j = -n_grid; j <= n_grid; ++j) {
-      const double yp = parent_fixed ? fixed_p : i * kDegToRad, yc = j * kDegToRad;
-      const double v = cost(yp, yc);
-      if (v < best) {
-        best = v;
-        yaw_p = yp;
-        yaw_c = yc;
-      }
+  // 1. A 1 deg grid; cost(i, j) = a_i + b_j + v_i . xc_j + s, the terms precomputed per node.
+  constexpr int kMaxGrid = 90;
+  const int n_grid = std::clamp(static_cast<int>(std::floor(range * kRadToDeg)), 0, kMaxGrid);
+  const int n_p = parent_fixed ? 1 : 2 * n_grid + 1, n_c = 2 * n_grid + 1;
+  std::array<double, 2 * kMaxGrid + 1> a{}, b{};
+  std::array<Eigen::Vector2d, 2 * kMaxGrid + 1> v, xc;
+  const auto yaw_p_at = [&](int i) {
+    return parent_fixed ? fixed_yaw_p : (i - n_grid) * kDegToRad;
+  };
+  const auto yaw_c_at = [&](int j) { return (j - n_grid) * kDegToRad; };
+  const Eigen::Matrix2d hpp = h.topLeftCorner<2, 2>(), hcc = h.bottomRightCorner<2, 2>();
+  const Eigen::Matrix2d hpc = h.topRightCorner<2, 2>();
+  for (int i = 0; i < n_p; ++i) {
+    const Eigen::Vector2d xp = half(yaw_p_at(i));
+    a[i] = xp.dot(hpp * xp) + 2 * g.head<2>().dot(xp);
+    v[i] = 2 * hpc.transpose() * xp;
+  }
+  for (int j = 0; j < n_c; ++j) {
+    xc[j] = half(yaw_c_at(j));
+    b[j] = xc[j].dot(hcc * xc[j]) + 2 * g.tail<2>().dot(xc[j]);
+  }
+  const auto grid = [&](int i, int j) { return a[i] + b[j] + v[i].dot(xc[j]) + s; };
+  // 2. Its local minima (no neighbour lower), the kMaxBasins lowest of them.
+  constexpr int kMaxBasins = 12;
+  std::array<YawFit, kMaxBasins> basins;
+  int n_basins = 0;
+  for (int i = 0; i < n_p; ++i) {
+    for (int j = 0; j < n_c; ++j) {
+      const double c = grid(i, j);
+      bool local_min = true;
+      for (int di = -1; di <= 1 && local_min; ++di)
+        for (int dj = -1; dj <= 1 && local_min; ++dj) {
+          const int ni = i + di, nj = j + dj;
+          if ((di || dj) && ni >= 0 && ni < n_p && nj >= 0 && nj < n_c && grid(ni, nj) < c)
+            local_min = false;
+        }
+      if (!local_min) continue;
+      int k = std::min(n_basins, kMaxBasins - 1);
+      if (n_basins == kMaxBasins && basins[k].cost <= c) continue;
+      for (; k > 0 && basins[k - 1].cost > c; --k)
+        basins[k] = basins[k - 1];
+      basins[k] = {yaw_p_at(i), yaw_c_at(j), c};
+      n_basins = std::min(n_basins + 1, kMaxBasins);
     }
   }
-  // ... then damped Newton iterations to its exact minimum. The minimum often lies in a long
-  // narrow valley (the two yaws are strongly correlated), where a finite grid around the best
-  // node snaps to a point up to degrees away along the valley and jumps between grid points as
-  // the data change slightly; the iteration is continuous in the data.
-  double lambda = 0;
-  for (int it = 0; it < 100; ++it) {
-    const double fp = 2 * (kAxisPhi + yaw_p), fc = 2 * (kAxisPhi + yaw_c);
-    const Eigen::Vector4d x = xvec(yaw_p, yaw_c);
-    const Eigen::Vector4d r = s.h * x + s.g;
-    // dx/dy (x depends on yaw_p through entries 0, 1 and on yaw_c through 2, 3).
-    Eigen::Matrix<double, 4, 2> dx = Eigen::Matrix<double, 4, 2>::Zero();
-    dx(0, 0) = -2 * std::sin(fp);
-    dx(1, 0) = 2 * std::cos(fp);
-    dx(2, 1) = -2 * std::sin(fc);
-    dx(3, 1) = 2 * std::cos(fc);
-    Eigen::Vector2d grad = 2 * dx.transpose() * r;
-    Eigen::Matrix2d hess = 2 * dx.transpose() * s.h * dx;
-    hess(0, 0) -= 8 * r.head<2>().dot(x.head<2>());  // d2x/dy2 = -4 x
-    hess(1, 1) -= 8 * r.tail<2>().dot(x.tail<2>());
-    if (parent_fixed) {
-      grad.x() = 0;
-      hess(0, 1) = hess(1, 0) = 0;
-      hess(0, 0) = 1;
-    }
-    const double diag_scale = std::max(std::abs(hess(0, 0)) + std::abs(hess(1, 1)), 1e-300);
-    bool improved = false, converged = false;
-    for (int tries = 0; tries < 30 && !improved; ++tries) {
-      Eigen::Matrix2d m = hess;
-      m.diagonal().array() += lambda * diag_scale;
-      const Eigen::LDLT<Eigen::Matrix2d> ldlt(m);
-      Eigen::Vector2d step = Eigen::Vector2d::Zero();
-      if (ldlt.info() == Eigen::Success && ldlt.isPositive()) step = -ldlt.solve(grad);
-      const double np = std::clamp(yaw_p + step.x(), -range, range);
-      const double nc = std::clamp(yaw_c + step.y(), -range, range);
-      const double v = step.allFinite() ? cost(np, nc) : best;
-      if (v < best) {
-        improved = true;
-        converged = std::abs(np - yaw_p) + std::abs(nc - yaw_c) < 1e-10;
-        best = v;
-        yaw_p = np;
-        yaw_c = nc;
-        lambda *= 0.25;
-      } else {
-        lambda = lambda == 0 ? 1e-6 : lambda * 8;
+  // 3. Damped Newton iterations from each to its exact minimum. The minimum often lies in a long
+  // narrow valley (the two yaws are strongly correlated), where a grid node lies up to degrees
+  // away along the valley and jumps between nodes as the data change slightly; the iteration is
+  // continuous in the data.
+  const auto polish = [&](YawFit& m) {
+    double lambda = 0;
+    for (int it = 0; it < 100; ++it) {
+      const double fp = 2 * (kAxisPhi + m.yaw_p), fc = 2 * (kAxisPhi + m.yaw_c);
+      Eigen::Vector4d x;
+      x << half(m.yaw_p), half(m.yaw_c);
+      const Eigen::Vector4d r = h * x + g;
+      // dx/dy (x depends on yaw_p through entries 0, 1 and on yaw_c through 2, 3).
+      Eigen::Matrix<double, 4, 2> dx = Eigen::Matrix<double, 4, 2>::Zero();
+      dx(0, 0) = -2 * std::sin(fp);
+      dx(1, 0) = 2 * std::cos(fp);
+      dx(2, 1) = -2 * std::sin(fc);
+      dx(3, 1) = 2 * std::cos(fc);
+      Eigen::Vector2d grad = 2 * dx.transpose() * r;
+      Eigen::Matrix2d hess = 2 * dx.transpose() * h * dx;
+      hess(0, 0) -= 8 * r.head<2>().dot(x.head<2>());  // d2x/dy2 = -4 x
+      hess(1, 1) -= 8 * r.tail<2>().dot(x.tail<2>());
+      if (parent_fixed) {
+        grad.x() = 0;
+        hess(0, 1) = hess(1, 0) = 0;
+        hess(0, 0) = 1;
       }
+      const double diag_scale = std::max(std::abs(hess(0, 0)) + std::abs(hess(1, 1)), 1e-300);
+      bool improved = false, converged = false;
+      for (int tries = 0; tries < 30 && !improved; ++tries) {
+        Eigen::Matrix2d mm = hess;
+        mm.diagonal().array() += lambda * diag_scale;
+        const Eigen::LDLT<Eigen::Matrix2d> ldlt(mm);
+        Eigen::Vector2d step = Eigen::Vector2d::Zero();
+        if (ldlt.info() == Eigen::Success && ldlt.isPositive()) step = -ldlt.solve(grad);
+        const double np = std::clamp(m.yaw_p + step.x(), -range, range);
+        const double nc = std::clamp(m.yaw_c + step.y(), -range, range);
+        const double c = step.allFinite() ? cost(np, nc) : m.cost;
+        if (c < m.cost) {
+          improved = true;
+          converged = std::abs(np - m.yaw_p) + std::abs(nc - m.yaw_c) < 1e-10;
+          m = {np, nc, c};
+          lambda *= 0.25;
+        } else {
+          lambda = lambda == 0 ? 1e-6 : lambda * 8;
+        }
+      }
+      if (!improved || converged) break;
     }
-    if (!improved || converged) break;
+  };
+  if (basin_margin < 0) {  // the former search: the grid's lowest node's basin only
+    polish(basins[0]);
+    return basins[0];
+  }
+  double lowest = std::numeric_limits<double>::infinity();
+  int n_distinct = 0;
+  for (int k = 0; k < n_basins; ++k) {
+    YawFit m = basins[k];
+    polish(m);
+    bool duplicate = false;  // several grid minima along one valley reach the same minimum
+    for (int q = 0; q < n_distinct && !duplicate; ++q)
+      duplicate = std::abs(basins[q].yaw_p - m.yaw_p) + std::abs(basins[q].yaw_c - m.yaw_c) <
+                  0.01 * kDegToRad;
+    if (duplicate) continue;
+    basins[n_distinct++] = m;
+    lowest = std::min(lowest, m.cost);
+  }
+  // 4. Of the minima the data do not separate (cost within basin_margin of the lowest), the one
+  // nearest the yaws in use: an offset changes basin only when the data clearly say so.
+  YawFit best{parent_fixed ? fixed_yaw_p : 0.0, 0.0, std::numeric_limits<double>::infinity()};
+  double best_dist = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < n_distinct; ++k) {
+    const YawFit& m = basins[k];
+    if (!(m.cost <= lowest + basin_margin * std::abs(lowest))) continue;
+    const double dist = std::hypot(parent_fixed ? 0.0 : m.yaw_p - ref_yaw_p, m.yaw_c - ref_yaw_c);
+    if (dist < best_dist) {
+      best_dist = dist;
+      best = m;
+    }
   }
   return best;
 }
@@ -226,11 +293,17 @@ bool HingeAxisRefiner::update(int64_t t_ns) {
   if (!opt_.enabled || !started_) return false;
   if (static_cast<double>(t_ns - t_last_update_ns_) * 1e-9 < opt_.update_interval_s) return false;
   t_last_update_ns_ = t_ns;
+  // The hysteresis holds a basin once its offset is in use; a pair's first estimate has none to
+  // hold (the N-pose value is no fit) and takes the lowest minimum.
+  const auto margin = [&](size_t h) {
+    return opt_.basin_margin < 0 || applied_[h] ? opt_.basin_margin : 0.0;
+  };
   for (size_t h = 0; h < kRefinePairs.size(); ++h) {
     // Re-estimate only pairs with new data (the search is ~10^4 cost evaluations).
     if (sums_[h].n != n_estimated_[h]) {
       HingeEstimate e;
-      e.valid = estimate(static_cast<int>(h), e);
+      e.valid = estimate(static_cast<int>(h), alpha_[index(kRefinePairs[h].parent)],
+                         alpha_[index(kRefinePairs[h].child)], margin(h), e);
       est_[h] = e;
       n_estimated_[h] = sums_[h].n;
     }
@@ -256,9 +329,9 @@ bool HingeAxisRefiner::update(int64_t t_ns) {
       const int p = index(kRefinePairs[h].parent);
       const bool own_parent = kRefinePairs[h].via < 0 && e.parent_valid;
       if (!own_parent && kRefinePairs[h].via < 0 && pass > 0) {
-        double yp = mean, yc = 0;
-        minimize(sums_[h], range, true, yp, yc);
-        e.applied_child_yaw_deg = yc * kRadToDeg;
+        const Sums& s = sums_[h];
+        e.applied_child_yaw_deg =
+            fit(s.h, s.g, s.s, range, true, mean, mean, alpha_[c], margin(h)).yaw_c * kRadToDeg;
       }
       alpha[c] = e.applied_child_yaw_deg * kDegToRad;
       known[c] = true;
@@ -276,6 +349,8 @@ bool HingeAxisRefiner::update(int64_t t_ns) {
     for (int i = 0; i < kSegmentCount; ++i)
       if (!known[i]) alpha[i] = mean;
   }
+  for (size_t h = 0; h < kRefinePairs.size(); ++h)
+    applied_[h] = applied_[h] || est_[h].valid;
   const bool changed = alpha != alpha_ || mean != common_;
   alpha_ = alpha;
   common_ = mean;

@@ -236,5 +236,106 @@ TEST(HingeCalibration, EstimateIsContinuousInTheBaseHeading) {
   }
 }
 
+// A child-yaw cost (parent fixed at 0) with two minima 9.5 deg apart, at y0 -+ 4.75 deg,
+// separated by a bump at y0 of 2 d (1 - cos 9.5 deg)^2 = 7.5 % of the cost (~1); `tilt` lowers the
+// minimum at y0 + 4.75 by 2 sin(9.5 deg) tilt = 0.33 tilt: cost = d + d cos 2w + B cos w + tilt
+// sin w + s, w = fc - 2 y0.
+struct DoubleWell {
+  Eigen::Matrix4d h = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d g = Eigen::Vector4d::Zero();
+  double s = 0;
+};
+DoubleWell double_well(double y0_deg, double tilt) {
+  // Minima at w = 180 +- 9.5 deg (y = y0 -+ 4.75 deg): 9.5 deg apart, so they sit differently
+  // between the 1 deg grid nodes.
+  const double d = 200, u = 9.5 * kDegToRad, b = 4 * d * std::cos(u), th = 2 * y0_deg * kDegToRad;
+  DoubleWell w;
+  w.h.bottomRightCorner<2, 2>() << d * (1 + std::cos(2 * th)), d * std::sin(2 * th),
+      d * std::sin(2 * th), d * (1 - std::cos(2 * th));
+  w.g.tail<2>() << 0.5 * (b * std::cos(th) - tilt * std::sin(th)),
+      0.5 * (b * std::sin(th) + tilt * std::cos(th));
+  // Lowest value of the untilted cost (d + d cos 2u - b cos u) -> 1.
+  w.s = 1 - (d + d * std::cos(2 * u) - b * std::cos(u));
+  return w;
+}
+// The hysteresis margin measured on the accuracy grid (docs/accuracy.md; opt-in).
+constexpr double kBasinMargin = 0.02;
+HingeAxisRefiner::YawFit fit_well(const DoubleWell& w, double ref_deg, double margin) {
+  return HingeAxisRefiner::fit(w.h, w.g, w.s, 40 * kDegToRad, true, 0, 0, ref_deg * kDegToRad,
+                               margin);
+}
+
+TEST(HingeCalibration, NearEqualMinimaKeepTheBasinInUse) {
+  // The ambiguous elbow fit (docs/accuracy.md): two minima ~5-10 deg apart whose costs differ by
+  // a fraction of a percent. Which one wins must not depend on where the search grid's nodes fall
+  // (a heading change of 0.01 deg shifts the cost against the grid) nor on which of the two is
+  // lower by 0.01 % this half second: the offset in use (here the N-pose value 0, then each
+  // result) is kept while the data do not separate the basins.
+  const double margin = kBasinMargin;
+  {  // Both minima exist, the far one (+6 deg) slightly lower.
+    const DoubleWell w = double_well(1.0, 0.001);
+    const auto far = fit_well(w, 5.75, margin), near = fit_well(w, 0.0, margin);
+    EXPECT_NEAR(far.yaw_c * kRadToDeg, 5.75, 0.3);
+    EXPECT_NEAR(near.yaw_c * kRadToDeg, -3.75, 0.3);
+    EXPECT_GT(near.cost, far.cost);
+    EXPECT_LT(near.cost, far.cost * 1.002);
+    EXPECT_NEAR(fit_well(w, 0.0, 0).yaw_c * kRadToDeg, 5.75, 0.3);  // margin 0: the lowest
+  }
+  // The landscape shifted by 0.01 deg steps over 1 deg while its tilt swings across zero (the
+  // lower minimum alternates): the result follows its basin continuously.
+  double ref_deg = 0;
+  for (int k = 0; k <= 100; ++k) {
+    const double shift_deg = 0.01 * k, tilt = 0.002 * std::sin(0.7 * k);
+    const auto f = fit_well(double_well(1.0 + shift_deg, tilt), ref_deg, margin);
+    ASSERT_NEAR(f.yaw_c * kRadToDeg, -3.75 + shift_deg, 0.3) << k;
+    ref_deg = f.yaw_c * kRadToDeg;
+  }
+  // Without the margin it jumps between the basins.
+  int jumps = 0;
+  ref_deg = 0;
+  for (int k = 0; k <= 100; ++k) {
+    const double tilt = 0.002 * std::sin(0.7 * k);
+    const auto f = fit_well(double_well(1.0 + 0.01 * k, tilt), ref_deg, 0);
+    if (k > 0 && std::abs(f.yaw_c * kRadToDeg - ref_deg) > 5) ++jumps;
+    ref_deg = f.yaw_c * kRadToDeg;
+  }
+  EXPECT_GT(jumps, 10);
+  // The former search (the basin of the grid's lowest node, margin < 0) jumps with the shift
+  // alone, the costs fixed: where the nodes fall decides.
+  jumps = 0;
+  double prev_deg = 0;
+  for (int k = 0; k <= 100; ++k) {
+    const double shift_deg = 0.01 * k;
+    const auto f = fit_well(double_well(1.0 + shift_deg, 0.0002), 0, -1);
+    if (k > 0 && std::abs(f.yaw_c * kRadToDeg - shift_deg - prev_deg) > 5) ++jumps;
+    prev_deg = f.yaw_c * kRadToDeg - shift_deg;
+  }
+  EXPECT_GT(jumps, 0);
+  // With the margin, the same sweep stays in the basin in use.
+  for (int k = 0; k <= 100; ++k) {
+    const double shift_deg = 0.01 * k;
+    const auto f = fit_well(double_well(1.0 + shift_deg, 0.0002), -3.75 + shift_deg, margin);
+    ASSERT_NEAR(f.yaw_c * kRadToDeg, -3.75 + shift_deg, 0.3) << k;
+  }
+}
+
+TEST(HingeCalibration, ClearlyBetterMinimumWins) {
+  // Once the data favour the other basin by more than the margin (here ~5 % lower), the offset
+  // moves there, whichever basin is in use; and back when the data turn.
+  const double margin = kBasinMargin;
+  // Both basins exist (with every minimum a candidate, the one in use is kept) ...
+  EXPECT_LT(fit_well(double_well(1.0, 0.15), -3.75, 1.0).yaw_c * kRadToDeg, -2.0);
+  EXPECT_GT(fit_well(double_well(1.0, -0.15), 5.75, 1.0).yaw_c * kRadToDeg, 4.0);
+  // ... but the lower one by 5 % wins.
+  const auto to_far = fit_well(double_well(1.0, 0.15), -3.75, margin);
+  EXPECT_GT(to_far.yaw_c * kRadToDeg, 4.0);  // the tilt also moves the minimum (7.2)
+  const auto back = fit_well(double_well(1.0, -0.15), 5.75, margin);
+  EXPECT_LT(back.yaw_c * kRadToDeg, -2.0);
+  // A single minimum is found from any reference.
+  DoubleWell one = double_well(1.0, 0);
+  one.g.tail<2>() *= 2;  // B = 8 d cos 10 > 4 d: the bump is gone, one minimum at y0
+  EXPECT_NEAR(fit_well(one, 30.0, margin).yaw_c * kRadToDeg, 1.0, 1e-6);
+}
+
 }  // namespace
 }  // namespace mocap

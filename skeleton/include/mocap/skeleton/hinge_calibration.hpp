@@ -48,6 +48,16 @@ struct HingeRefineOptions {
   /// The parent's yaw is used only if the parent itself turned this much about axes other than
   /// the hinge axis (rotation about the axis alone, or none, leaves its yaw open).
   double min_parent_off_axis_deg = 0;
+  /// Ambiguous minima: a fit's cost often has a second minimum degrees away in the child's yaw
+  /// whose cost is within a fraction of a percent of the best. Every minimum whose cost is within
+  /// this fraction of the lowest counts as a candidate, and the candidate nearest the yaw offsets
+  /// in use (0 = the N-pose calibration until one is applied) is kept; the offset moves
+  /// to another basin only once that basin's cost is lower by more than this fraction (a
+  /// hysteresis: the data must clearly favour it). 0 = always the lowest minimum; negative = the
+  /// basin of the search grid's lowest node (the former search, which depends on the grid).
+  /// Default: the former search (-1); 0.02 wins the ambiguous arm raise cell but loses two other
+  /// targets on the accuracy grid (docs/accuracy.md, "Ambiguous minima"), so it is opt-in.
+  double basin_margin = -1;
 };
 
 /// One hinge's identification state (for diagnostics and the daemon's status).
@@ -111,6 +121,20 @@ class HingeAxisRefiner {
   /// error, since the filters' magnetometer headings scatter around the truth.
   double common_yaw_rad() const { return common_; }
 
+  /// One local minimum of a pair's cost (yaws in rad).
+  struct YawFit {
+    double yaw_p = 0, yaw_c = 0, cost = 0;
+  };
+  /// Fits the two yaw offsets of one pair to the cost x^T h x + 2 g^T x + s, x = (cos fp, sin
+  /// fp, cos fc, sin fc), f = 2 (90 deg + yaw) (the squared hinge residuals; `h` symmetric):
+  /// every local minimum of a 1 deg grid over +-range is taken to its exact minimum by damped
+  /// Newton iterations; of the minima within `basin_margin` (relative) of the lowest cost, the
+  /// one nearest the yaws in use (ref_yaw_p, ref_yaw_c) wins. With parent_fixed, the parent's yaw
+  /// is `fixed_yaw_p` and only the child's is searched. Allocation-free.
+  static YawFit fit(const Eigen::Matrix4d& h, const Eigen::Vector4d& g, double s, double range,
+                    bool parent_fixed, double fixed_yaw_p, double ref_yaw_p, double ref_yaw_c,
+                    double basin_margin);
+
   /// The base calibration with the yaw offsets removed and the body heading corrected by
   /// `common_rad` (segments not calibrated are left alone).
   static Calibration apply(const Calibration& base,
@@ -127,18 +151,16 @@ class HingeAxisRefiner {
     double parent_travel_rad = 0;  ///< the parent's own rotation over the same samples
     int n = 0;
   };
-  bool estimate(int hinge, HingeEstimate& out) const;
-  /// Minimum of a pair's squared residuals over the two yaw offsets (rad, within +-range):
-  /// 1 deg grid, then damped Newton iterations. With parent_fixed, yaw_p is given and only
-  /// yaw_c is searched. Returns the minimal cost.
-  static double minimize(const Sums& s, double range, bool parent_fixed, double& yaw_p,
-                         double& yaw_c);
+  /// Fits pair `hinge` with the applied yaws (rad) as the basin reference.
+  bool estimate(int hinge, double ref_yaw_p, double ref_yaw_c, double margin,
+                HingeEstimate& out) const;
 
   RigMapping rig_;
   HingeRefineOptions opt_;
   std::array<Sums, kRefinePairs.size()> sums_{};
   std::array<HingeEstimate, kRefinePairs.size()> est_{};
   std::array<int, kRefinePairs.size()> n_estimated_{};  ///< sums_[h].n at the last estimate
+  std::array<bool, kRefinePairs.size()> applied_{};     ///< the pair's offsets are in use
   std::array<Eigen::Quaterniond, kSegmentCount> q_prev_;
   std::array<int64_t, kSegmentCount> t_prev_ns_{};
   std::array<bool, kSegmentCount> have_prev_{};
