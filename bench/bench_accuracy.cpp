@@ -155,6 +155,18 @@ void print_markdown_row(const sim::AccuracyResult& r) {
 
 /// Applies a comma list of name=value overrides to the named fields; false (with a message
 /// naming the option and the entry) on an unknown name or a bad number.
+/// An on|off option (absent: the default already in `out`); false after printing an error.
+bool on_off(const CliArgs& args, const char* name, bool& out) {
+  if (!args.has(name)) return true;
+  const std::string v = args.get_or(name, "");
+  if (v != "on" && v != "off") {
+    std::fprintf(stderr, "mocap bench accuracy: --%s must be on or off\n", name);
+    return false;
+  }
+  out = v == "on";
+  return true;
+}
+
 bool set_params(const std::string& list, const char* option,
                 std::initializer_list<std::pair<std::string_view, double*>> fields) {
   for (const std::string& kv : expand(list, {})) {
@@ -235,24 +247,10 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   if (args.has("no-refine")) base.hinge_refine.enabled = false;
-  const std::string coupling = args.get_or("coupling", "on");
-  if (coupling != "on" && coupling != "off") {
-    std::fprintf(stderr, "mocap bench accuracy: --coupling must be on or off\n");
+  if (!on_off(args, "coupling", base.heading_coupling.enabled) ||
+      !on_off(args, "anchor", base.anchor_heading) ||
+      !on_off(args, "consensus", base.rig_consensus))
     return 2;
-  }
-  base.heading_coupling.enabled = coupling == "on";
-  const std::string anchor = args.get_or("anchor", "on");
-  if (anchor != "on" && anchor != "off") {
-    std::fprintf(stderr, "mocap bench accuracy: --anchor must be on or off\n");
-    return 2;
-  }
-  base.anchor_heading = anchor == "on";
-  const std::string consensus = args.get_or("consensus", "on");
-  if (consensus != "on" && consensus != "off") {
-    std::fprintf(stderr, "mocap bench accuracy: --consensus must be on or off\n");
-    return 2;
-  }
-  base.rig_consensus = consensus == "on";
   HeadingCouplingOptions& c = base.heading_coupling;
   if (!set_params(args.get_or("coupling-param", ""), "coupling-param",
                   {{"tau_s", &c.tau_s},
