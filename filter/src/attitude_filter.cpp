@@ -6,18 +6,17 @@
 #include <algorithm>
 #include <cmath>
 
+#include <numbers>
+#include "mocap/core/units.hpp"
 #include "mocap/filter/input_check.hpp"
 
 namespace mocap {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
-
 double wrap_pi(double a) {
-  if (a > kPi) a -= 2 * kPi;
-  if (a < -kPi) a += 2 * kPi;
-  if (!(std::abs(a) <= kPi)) a = std::remainder(a, 2 * kPi);
+  if (a > std::numbers::pi) a -= 2 * std::numbers::pi;
+  if (a < -std::numbers::pi) a += 2 * std::numbers::pi;
+  if (!(std::abs(a) <= std::numbers::pi)) a = std::remainder(a, 2 * std::numbers::pi);
   return a;
 }
 
@@ -67,7 +66,7 @@ void AttitudeFilter::refresh_coeffs() {
   c_.k_mag = filt::gain_from_tau(p_.tau_mag_s, c_.mag_ts_s);
   // Kalman heading: q = sigma^2 / tau, r = sigma^2 tau / T gives the time constant tau_mag
   // and the steady-state one-sigma heading_sigma_deg in an undisturbed field, at any rate.
-  const double sh2 = sq(p_.heading_sigma_deg * kDeg);
+  const double sh2 = sq(p_.heading_sigma_deg * kRadPerDeg);
   c_.heading_q_rad2_s = sh2 / std::max(p_.tau_mag_s, 1e-9);
   c_.heading_r0_rad2 = sh2 * p_.tau_mag_s / c_.mag_ts_s;
   c_.k_mag_ref = filt::gain_from_tau(p_.mag_ref_tau_s, c_.mag_ts_s);
@@ -76,7 +75,7 @@ void AttitudeFilter::refresh_coeffs() {
       std::max(1, static_cast<int>(std::lround(p_.hard_iron_step_s / c_.mag_ts_s)));
   c_.hard_iron.p0_offset_rel2 = sq(p_.hard_iron_sigma0);
   c_.hard_iron.q_offset_rel2_s = c_.hard_iron.p0_offset_rel2 / std::max(p_.hard_iron_tau_s, 1e-9);
-  c_.hard_iron.q_field_rel2_s = sq(p_.hard_iron_field_rw_deg * kDeg);
+  c_.hard_iron.q_field_rel2_s = sq(p_.hard_iron_field_rw_deg * kRadPerDeg);
   c_.hard_iron.r_rel2 = sq(p_.hard_iron_noise);
   c_.hard_iron.gate_rel2 = sq(p_.hard_iron_gate);
   c_.hard_iron.min_offset_rel = p_.hard_iron_min_offset;
@@ -112,7 +111,7 @@ void AttitudeFilter::refresh_coeffs() {
   const double gain_ts = c_.gain_decim * c_.bias_ts_s;
   c_.gain_p0 = sq(p_.gyr_gain_sigma_init);
   c_.gain_v = sq(1e-3) * gain_ts / std::max(p_.gyr_gain_forgetting_time_s, 1e-9);
-  c_.gain_w = c_.bias_motion_w * sq(0.01 * kDeg);
+  c_.gain_w = c_.bias_motion_w * sq(0.01 * kRadPerDeg);
 }
 
 // Period of one stream from its timestamps. Returns false (and counts) for a timestamp that
@@ -187,8 +186,9 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
   const auto& lp = st_.rest_gyr_lp.step(gyr.data(), c_.rest_gyr_lp, p_.rest_filter_tau_s, ts);
   st_.rest_last_gyr_lp = Eigen::Vector3d(lp[0], lp[1], lp[2]);
   st_.rest_dev_gyr2 = (gyr - st_.rest_last_gyr_lp).squaredNorm();
-  const double clip = p_.bias_clip_deg_s * kDeg;
-  if (st_.rest_dev_gyr2 >= (p_.rest_th_gyr_deg_s * kDeg) * (p_.rest_th_gyr_deg_s * kDeg) ||
+  const double clip = p_.bias_clip_deg_s * kRadPerDeg;
+  if (st_.rest_dev_gyr2 >=
+          (p_.rest_th_gyr_deg_s * kRadPerDeg) * (p_.rest_th_gyr_deg_s * kRadPerDeg) ||
       st_.rest_last_gyr_lp.cwiseAbs().maxCoeff() > clip) {
     st_.rest_t_s = 0;
     st_.rest = false;
@@ -217,9 +217,9 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   // Rest detection, acc part.
   const auto& alp = st_.rest_acc_lp.step(acc.data(), c_.rest_acc_lp, p_.rest_filter_tau_s, ts);
   st_.rest_dev_acc2 = (acc - Eigen::Vector3d(alp[0], alp[1], alp[2])).squaredNorm();
-  const double thg = p_.rest_th_gyr_deg_s * kDeg, tha = p_.rest_th_acc_m_s2;
+  const double thg = p_.rest_th_gyr_deg_s * kRadPerDeg, tha = p_.rest_th_acc_m_s2;
   if (st_.rest_dev_gyr2 >= thg * thg || st_.rest_dev_acc2 >= tha * tha ||
-      st_.rest_last_gyr_lp.cwiseAbs().maxCoeff() > p_.bias_clip_deg_s * kDeg) {
+      st_.rest_last_gyr_lp.cwiseAbs().maxCoeff() > p_.bias_clip_deg_s * kRadPerDeg) {
     st_.rest_t_s = 0;
     st_.rest = false;
   } else {
@@ -333,7 +333,7 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
       e.head<2>() -= reg * st_.gain;
       if (++st_.gain_n >= c_.gain_decim) {
         st_.gain_n = 0;
-        const double clip = p_.bias_clip_deg_s * kDeg;
+        const double clip = p_.bias_clip_deg_s * kRadPerDeg;
         update_gain(e.head<2>().cwiseMax(-clip).cwiseMin(clip), reg, r_lp);
       }
     }
@@ -346,7 +346,7 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   for (int i = 0; i < 3; ++i)
     if (st_.bias_p(i, i) < c_.bias_p0) st_.bias_p(i, i) += c_.bias_v;
   if (w.x() < 0) return;
-  const double clip = p_.bias_clip_deg_s * kDeg;
+  const double clip = p_.bias_clip_deg_s * kRadPerDeg;
   e = e.cwiseMax(-clip).cwiseMin(clip);
   const Eigen::Matrix3d s = cm * st_.bias_p * cm.transpose() + Eigen::Matrix3d(w.asDiagonal());
   const Eigen::Matrix3d k = st_.bias_p * cm.transpose() * s.inverse();
@@ -365,7 +365,7 @@ void AttitudeFilter::update_gain(const Eigen::Vector2d& residual,
   for (int i = 0; i < 9; ++i)
     if (st_.gain_p(i, i) < c_.gain_p0) st_.gain_p(i, i) += c_.gain_v;
   // Measurement noise: the motion update's plus the current bias uncertainty.
-  const Eigen::Matrix<double, 2, 3> cb = r_lp.topRows<2>() * (0.01 * kDeg);
+  const Eigen::Matrix<double, 2, 3> cb = r_lp.topRows<2>() * (0.01 * kRadPerDeg);
   Eigen::Matrix2d s = cb * st_.bias_p * cb.transpose();
   s.diagonal().array() += c_.gain_w;
   const Eigen::Matrix<double, 9, 2> ph = st_.gain_p * reg.transpose();
@@ -383,7 +383,7 @@ Eigen::Matrix3d AttitudeFilter::gyro_gain() const {
 double AttitudeFilter::field_deviation2(double norm, double dip, double ref_norm,
                                         double ref_dip) const {
   const double dn = (norm - ref_norm) / (p_.mag_norm_th * ref_norm);
-  const double dd = (dip - ref_dip) / (p_.mag_dip_th_deg * kDeg);
+  const double dd = (dip - ref_dip) / (p_.mag_dip_th_deg * kRadPerDeg);
   return dn * dn + dd * dd;
 }
 
@@ -433,10 +433,11 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     // Hard-iron estimator (decimated), fed with the latency-compensated raw field.
     st_.hi_dt_s += dt_s > 0 ? dt_s : ts;
     if (++st_.hi_n >= c_.hard_iron_decim) {
-      const double lat_s = p_.mag_latency_tau_s > 0
-                               ? st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kDeg,
-                                                           p_.mag_latency_max_s)
-                               : 0.0;
+      const double lat_s =
+          p_.mag_latency_tau_s > 0
+              ? st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kRadPerDeg,
+                                          p_.mag_latency_max_s)
+              : 0.0;
       const Eigen::Vector3d w = st_.last_gyr_rad_s - st_.bias_rad_s;
       const Eigen::Vector3d m_c = mag_raw - lat_s * w.cross(mag_raw - st_.hard_iron.used_uT);
       const Eigen::Matrix3d r6 = q6.toRotationMatrix();
@@ -454,8 +455,9 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   if (p_.mag_latency_tau_s > 0) {
     const Eigen::Vector3d v_e = q6 * (st_.last_gyr_rad_s - st_.bias_rad_s).cross(mag);
     st_.mag_latency.step(m_e, v_e, c_.k_latency_hp, c_.k_latency);
-    m_e -=
-        st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kDeg, p_.mag_latency_max_s) * v_e;
+    m_e -= st_.mag_latency.latency_s(p_.mag_latency_min_rate_deg_s * kRadPerDeg,
+                                     p_.mag_latency_max_s) *
+           v_e;
   }
 
   if (p_.mag_dist_rejection) {
@@ -465,7 +467,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     st_.mag_norm_dip[0] = f[0];
     st_.mag_norm_dip[1] = f[1];
     const double norm = f[0], dip = f[1];
-    const double dip_th = p_.mag_dip_th_deg * kDeg;
+    const double dip_th = p_.mag_dip_th_deg * kRadPerDeg;
     if (std::abs(norm - st_.mag_ref_norm) < p_.mag_norm_th * st_.mag_ref_norm &&
         std::abs(dip - st_.mag_ref_dip) < dip_th) {
       st_.mag_undisturbed_t_s += ts;
@@ -484,7 +486,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       // A new field replacing a known one must be seen while rotating (a static local
       // disturbance stays self-consistent at rest); the very first field needs no rotation.
       if ((st_.mag_ref_norm == 0 && !p_.mag_first_needs_rotation) ||
-          st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kDeg)
+          st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kRadPerDeg)
         st_.mag_cand_t_s += ts;
       st_.mag_cand_age_s += ts;
       st_.mag_cand_norm += c_.k_mag_ref * (norm - st_.mag_cand_norm);
@@ -492,15 +494,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       if (st_.mag_disturbed &&
           (st_.mag_cand_t_s >= p_.mag_new_time_s ||
            (st_.mag_ref_norm == 0 && st_.mag_cand_t_s >= p_.mag_new_first_time_s))) {
-        if (!st_.mag_have_ref) {
-          // End of start-up: converge afresh on samples that pass the tests from now on.
-          // The schedule restarts at the gain the heading variance implies (1 after a full
-          // reset, about the Kalman gain when the provisional heading is kept).
-          st_.mag_have_ref = true;
-          const double s0 = p_.mag_first_ref_sigma_deg * kDeg;
-          st_.delta_var_rad2 = std::max(st_.delta_var_rad2, s0 * s0);
-          st_.k_mag_init = st_.delta_var_rad2 / (st_.delta_var_rad2 + c_.heading_r0_rad2);
-        }
+        if (!st_.mag_have_ref) end_mag_startup();
         st_.mag_ref_norm = st_.mag_cand_norm;
         st_.mag_ref_dip = st_.mag_cand_dip;
         st_.ref_imposed = false;
@@ -534,7 +528,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   // Kalman heading. Predict: the heading drifts by the nominal process noise plus what the
   // gyro-bias uncertainty allows. Measurement variance: nominal (steady state = tau_mag),
   // inflated by the squared disturbance indicators, each relative to its threshold.
-  const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
+  const double sb2 = st_.bias_p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
   st_.delta_var_rad2 += (c_.heading_q_rad2_s + sb2) * (dt_s > 0 ? dt_s : ts);  // real gap
   double r = c_.heading_r0_rad2;
   if (p_.mag_dist_rejection && (st_.mag_ref_norm > 0 || st_.mag_cand_norm > 0)) {
@@ -552,7 +546,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       // A corrected field is only as good as the offset: its sigma as a heading angle.
       const double sh = st_.hi_weight * st_.hard_iron.used_sigma_uT /
                         std::max(m_e.head<2>().norm(), 1e-3 * st_.mag_ref_norm + 1e-9);
-      const double rel = sh / (p_.heading_sigma_deg * kDeg);
+      const double rel = sh / (p_.heading_sigma_deg * kRadPerDeg);
       score += p_.hard_iron_trust_weight * rel * rel;
     }
     r *= 1.0 + score;
@@ -646,6 +640,16 @@ Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
   return st_.q_delta * (st_.q_acc * st_.q_gyr);
 }
 
+// End of start-up (a first reference field accepted or imposed): converge afresh on samples
+// that pass the tests from now on. The schedule restarts at the gain the heading variance
+// implies (1 after a full reset, about the Kalman gain when the provisional heading is kept).
+void AttitudeFilter::end_mag_startup() {
+  st_.mag_have_ref = true;
+  const double s0 = p_.mag_first_ref_sigma_deg * kRadPerDeg;
+  st_.delta_var_rad2 = std::max(st_.delta_var_rad2, s0 * s0);
+  st_.k_mag_init = st_.delta_var_rad2 / (st_.delta_var_rad2 + c_.heading_r0_rad2);
+}
+
 void AttitudeFilter::anchor_heading() {
   // The field is untrusted now: the calibration takes a gyro-held heading; keep it when the
   // field is trusted again (update_mag). A trust anchor already set stays (it is part of the
@@ -675,13 +679,7 @@ void AttitudeFilter::set_reference_field(double norm_uT, double dip_rad) {
   if (!(norm_uT > 0) || !std::isfinite(norm_uT) || !std::isfinite(dip_rad) ||
       !p_.mag_dist_rejection)
     return;
-  if (!st_.mag_have_ref) {
-    // End of start-up as if accepted (update_mag): converge on samples that pass the tests.
-    st_.mag_have_ref = true;
-    const double s0 = p_.mag_first_ref_sigma_deg * kDeg;
-    st_.delta_var_rad2 = std::max(st_.delta_var_rad2, s0 * s0);
-    st_.k_mag_init = st_.delta_var_rad2 / (st_.delta_var_rad2 + c_.heading_r0_rad2);
-  }
+  if (!st_.mag_have_ref) end_mag_startup();  // as if accepted in update_mag
   st_.mag_ref_norm = norm_uT;
   st_.mag_ref_dip = dip_rad;
   st_.ref_imposed = true;
@@ -696,7 +694,7 @@ void AttitudeFilter::set_reference_field(double norm_uT, double dip_rad) {
   // The sensor's own candidate (a local field) must be earned again, while rotating.
   st_.mag_cand_t_s = 0;
   if (std::abs(st_.mag_norm_dip[0] - norm_uT) >= p_.mag_norm_th * norm_uT ||
-      std::abs(st_.mag_norm_dip[1] - dip_rad) >= p_.mag_dip_th_deg * kDeg) {
+      std::abs(st_.mag_norm_dip[1] - dip_rad) >= p_.mag_dip_th_deg * kRadPerDeg) {
     st_.mag_disturbed = true;
     st_.mag_undisturbed_t_s = 0;
   }
@@ -731,10 +729,10 @@ void AttitudeFilter::update_anchor() {
 }
 
 double AttitudeFilter::heading_sigma_rad() const {
-  if (!st_.have_mag) return kPi;
+  if (!st_.have_mag) return std::numbers::pi;
   // Predicted to the newest gyro sample (the magnetometer may be slower or missing).
   const double since_mag_s = std::max(static_cast<double>(st_.t_gyr_ns - st_.t_mag_ns), 0.0) * 1e-9;
-  const double sb2 = st_.bias_p(2, 2) * (0.01 * kDeg) * (0.01 * kDeg);
+  const double sb2 = st_.bias_p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
   return std::sqrt(std::max(st_.delta_var_rad2 + (c_.heading_q_rad2_s + sb2) * since_mag_s, 0.0));
 }
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include "mocap/core/units.hpp"
 
 namespace mocap {
 
@@ -33,10 +34,9 @@ AttitudeErrors score_trial(const BroadTrial& trial, const std::vector<Eigen::Qua
     ++r.n;
   }
   if (r.n == 0) return r;
-  constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-  r.total_deg = std::sqrt(st / r.n) * kRadToDeg;
-  r.heading_deg = std::sqrt(sh / r.n) * kRadToDeg;
-  r.inclination_deg = std::sqrt(si / r.n) * kRadToDeg;
+  r.total_deg = std::sqrt(st / r.n) * kDegPerRad;
+  r.heading_deg = std::sqrt(sh / r.n) * kDegPerRad;
+  r.inclination_deg = std::sqrt(si / r.n) * kDegPerRad;
   return r;
 }
 

@@ -4,9 +4,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mocap/core/units.hpp"
+
 namespace mocap::filt {
 namespace {
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 double median(std::vector<double>& v, std::size_t n) {
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(n / 2);
@@ -46,7 +47,7 @@ int RigFieldConsensus::step(int64_t t_ns, std::span<AttitudeFilter> filters) {
                          std::abs(f.mag_reference_norm_uT() - norm_uT_) >
                              p_.threshold_scale * fp.mag_norm_th * norm_uT_ ||
                          std::abs(f.mag_reference_dip_rad() - dip_rad_) >
-                             p_.threshold_scale * fp.mag_dip_th_deg * kDeg;
+                             p_.threshold_scale * fp.mag_dip_th_deg * kRadPerDeg;
     if (!differs) continue;
     f.set_reference_field(norm_uT_, dip_rad_);
     ++changed;

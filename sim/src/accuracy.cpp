@@ -5,6 +5,7 @@
 #include <numbers>
 #include <vector>
 
+#include "mocap/core/units.hpp"
 #include "mocap/filter/attitude_filter.hpp"
 #include "mocap/filter/filter_param_names.hpp"
 #include "mocap/filter/rig_field_consensus.hpp"
@@ -18,10 +19,8 @@
 namespace mocap::sim {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-
 double angle_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
-  return 2 * std::acos(std::min(1.0, std::abs(a.normalized().dot(b.normalized())))) * kRadToDeg;
+  return 2 * std::acos(std::min(1.0, std::abs(a.normalized().dot(b.normalized())))) * kDegPerRad;
 }
 
 RigMapping performer_rig() {
@@ -104,7 +103,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       mag_disturbed{};
   const auto yaw_deg = [](const Eigen::Quaterniond& q) {
     const Eigen::Vector3d x = q * Eigen::Vector3d::UnitX();
-    return std::atan2(x.y(), x.x()) * kRadToDeg;
+    return std::atan2(x.y(), x.x()) * kDegPerRad;
   };
 
   for (int k = 1; k * frame_s <= end_s + 1e-9; ++k) {
@@ -181,7 +180,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       heading_sq[id] += dh * dh;
       if (filters[id].mag_disturbed()) ++mag_disturbed[id];
       const double c = std::clamp((q_err * Eigen::Vector3d::UnitZ()).z(), -1.0, 1.0);
-      incl_sq[id] += std::pow(std::acos(c) * kRadToDeg, 2);
+      incl_sq[id] += std::pow(std::acos(c) * kDegPerRad, 2);
     }
   }
   if (r.frames == 0) return r;
@@ -217,7 +216,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     r.sensor_inclination_rmse_deg[s] = std::sqrt(incl_sq[id] / r.frames);
     r.sensor_mag_disturbed_fraction[s] = mag_disturbed[id] / r.frames;
     r.sensor_ref_imposed[s] = filters[id].mag_reference_imposed();
-    r.sensor_anchor_trust_deg[s] = filters[id].anchor_trust_rad() * kRadToDeg;
+    r.sensor_anchor_trust_deg[s] = filters[id].anchor_trust_rad() * kDegPerRad;
   }
   r.root_drift_fraction = r.distance_walked_m >= 1.0 ? r.root_drift_m / r.distance_walked_m : 0.0;
   return r;

@@ -104,5 +104,11 @@ inline double tilt_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b)
   const Eigen::Vector3d zb = b.conjugate() * Eigen::Vector3d::UnitZ();
   return std::acos(std::clamp(za.dot(zb), -1.0, 1.0)) / kDeg;
 }
+/// Signed heading part of the error of est against truth: the error rotation's turn of the
+/// earth x axis about earth z, degrees.
+inline double heading_err_deg(const Eigen::Quaterniond& est, const Eigen::Quaterniond& truth) {
+  const Eigen::Vector3d x = (est * truth.conjugate()) * Eigen::Vector3d::UnitX();
+  return std::atan2(x.y(), x.x()) / kDeg;
+}
 
 }  // namespace mocap::test

@@ -19,12 +19,6 @@ constexpr double kLeaveS = 10;  // the hand leaves the magnet (fades over 1 s)
 constexpr double kAnchorS = 3;  // calibration (N-pose) taken here, when anchoring
 constexpr double kDurationS = 45;
 
-/// Signed heading error (est vs truth), degrees.
-double heading_err_deg(const Eigen::Quaterniond& est, const Eigen::Quaterniond& truth) {
-  const Eigen::Vector3d x = (est * truth.conjugate()) * Eigen::Vector3d::UnitX();
-  return std::atan2(x.y(), x.x()) / kDeg;
-}
-
 std::vector<SynthStream> make_rig() {
   std::vector<SynthStream> rig;
   for (int i = 0; i < kSensors; ++i) {

@@ -10,5 +10,7 @@ namespace mocap {
 inline constexpr double kStandardGravity_m_s2 = 9.80665;
 /// Radians per degree.
 inline constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+/// Degrees per radian.
+inline constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 }  // namespace mocap

@@ -362,6 +362,7 @@ class AttitudeFilter {
   void update_acc(const Eigen::Vector3d& acc, double dt_s);
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
   void update_anchor();
+  void end_mag_startup();
   void select_hard_iron(const Eigen::Vector3d& m_raw_e, const Eigen::Vector3d& m_corr_e);
   /// Squared deviation of a field (norm, dip) from a reference, in units of the disturbance
   /// thresholds (mag_norm_th, mag_dip_th_deg).

@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cmath>
+#include <numbers>
+#include "mocap/core/units.hpp"
 
 namespace mocap::filt {
 
@@ -18,10 +20,9 @@ struct LowpassCoeffs {
 inline LowpassCoeffs butterworth(double tau_s, double ts_s) {
   LowpassCoeffs c;
   if (!(tau_s > 0) || !(ts_s > 0)) return c;
-  constexpr double kPi = 3.14159265358979323846;
-  const double fc_hz = std::sqrt(2.0) / (2.0 * kPi * tau_s);
+  const double fc_hz = std::sqrt(2.0) / (2.0 * std::numbers::pi * tau_s);
   if (fc_hz * ts_s >= 0.45) return c;  // near Nyquist: behave as pass-through
-  const double k = std::tan(kPi * fc_hz * ts_s);
+  const double k = std::tan(std::numbers::pi * fc_hz * ts_s);
   const double d = k * k + std::sqrt(2.0) * k + 1.0;
   c.b0 = k * k / d;
   c.b1 = 2.0 * c.b0;

@@ -6,11 +6,12 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include "mocap/core/units.hpp"
 
 namespace mocap {
 
-inline constexpr double kRadToDeg = 180.0 / M_PI;
-inline constexpr double kDegToRad = M_PI / 180.0;
+inline constexpr double kRadToDeg = kDegPerRad;
+inline constexpr double kDegToRad = kRadPerDeg;
 
 /// Angle of the rotation q, radians in [0, pi] (q and -q give the same angle).
 inline double rotation_angle_rad(const Eigen::Quaterniond& q) {
