@@ -213,7 +213,7 @@ int run_accuracy(int argc, char** argv) {
       .option("refine-param",
               "HingeRefineOptions overrides, comma list of name=value (min_travel_deg, "
               "max_yaw_deg, min_rate_deg_s, via_still_fraction, "
-              "min_parent_off_axis_deg, basin_margin)")
+              "min_parent_off_axis_deg, basin_margin, direction_fraction)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
               "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)")
@@ -268,6 +268,7 @@ int run_accuracy(int argc, char** argv) {
                    {"max_yaw_deg", &h.max_yaw_deg},
                    {"min_rate_deg_s", &h.min_rate_deg_s},
                    {"via_still_fraction", &h.via_still_fraction},
+                   {"direction_fraction", &h.direction_fraction},
                    {"min_parent_off_axis_deg", &h.min_parent_off_axis_deg},
                    {"basin_margin", &h.basin_margin}}))
     return 2;

@@ -97,33 +97,50 @@ void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& 
     const Eigen::Vector3d& wp = w_[p];
     const Eigen::Vector3d& wc = w_[c];
     if (wp.norm() < min_rate && wc.norm() < min_rate) continue;
+    // The child's rate relative to the parent, in the child frame (the flexion rate).
+    const Eigen::Vector3d w_rel = wc - (q[c].conjugate() * q[p]) * wp;
+    const double rel = w_rel.norm();
     if (v >= 0) {
       // The joint between `via` and the child (the wrist) must be still.
       if (!rig_.tracked(v) || !have[v] || t_w_ns_[v] == 0 ||
           std::abs(t_w_ns_[v] - t_w_ns_[c]) > max_step_ns)
         continue;
       const double w_joint = (wc - (q[c].conjugate() * q[v]) * w_[v]).norm();
-      const double w_hinge = (wc - (q[c].conjugate() * q[p]) * wp).norm();
-      if (w_joint > opt_.via_still_fraction * w_hinge + 0.5 * min_rate) continue;
+      if (w_joint > opt_.via_still_fraction * rel + 0.5 * min_rate) continue;
     }
+    Sums& s = sums_[h];
+    // Direction terms (header): the relative rate's direction is the axis in a segment's frame
+    // while the other segment is nearly still.
+    const double fd = opt_.direction_fraction;
+    const auto add_direction = [&](const Eigen::Vector3d& w_axis, int part) {
+      double k;
+      Eigen::Vector2d u;
+      perp_terms(w_axis, k, u);
+      const double wt = w_axis.squaredNorm();
+      s.g.segment<2>(part) += 0.5 * wt * u;
+      s.s += wt * k;
+      s.scale += wt * wt;
+    };
+    if (fd > 0 && rel > min_rate) {
+      if (wp.norm() <= fd * rel) add_direction(w_rel, 2);
+      if (wc.norm() <= fd * rel) add_direction((q[p].conjugate() * q[c]) * wc - wp, 0);
+    }
+    // The rate-norm residual |w_p x j_p|^2 - |w_c x j_c|^2.
     double kp, kc;
     Eigen::Vector2d up, uc;
     perp_terms(wp, kp, up);
     perp_terms(wc, kc, uc);
     const Eigen::Vector4d a(up.x(), up.y(), -uc.x(), -uc.y());
     const double b = kp - kc;
-    Sums& s = sums_[h];
     s.h.noalias() += a * a.transpose();
     s.g += a * b;
     s.s += b * b;
     const double sc = wp.squaredNorm() + wc.squaredNorm();
     s.scale += sc * sc;
-    // Flexion travel: the child's rate relative to the parent, in the child frame.
-    const Eigen::Vector3d w_rel = wc - (q[c].conjugate() * q[p]) * wp;
-    s.travel_rad += w_rel.norm() * dt_w_s_[c];
+    s.travel_rad += rel * dt_w_s_[c];
     // The parent's rotation about axes other than the hinge axis (y) while the hinge flexes:
     // what pins the parent's yaw.
-    if (w_rel.norm() > 2 * min_rate) s.parent_travel_rad += std::hypot(wp.x(), wp.z()) * dt_w_s_[c];
+    if (rel > 2 * min_rate) s.parent_travel_rad += std::hypot(wp.x(), wp.z()) * dt_w_s_[c];
     ++s.n;
   }
 }
@@ -212,6 +229,7 @@ HingeAxisRefiner::YawFit HingeAxisRefiner::fit(const Eigen::Matrix4d& h, const E
   // away along the valley and jumps between nodes as the data change slightly; the iteration is
   // continuous in the data.
   const auto polish = [&](YawFit& m) {
+    m.cost = cost(m.yaw_p, m.yaw_c);  // the grid sums the terms in another order
     double lambda = 0;
     for (int it = 0; it < 100; ++it) {
       const double fp = 2 * (kAxisPhi + m.yaw_p), fc = 2 * (kAxisPhi + m.yaw_c);
@@ -239,12 +257,14 @@ HingeAxisRefiner::YawFit HingeAxisRefiner::fit(const Eigen::Matrix4d& h, const E
         Eigen::Matrix2d mm = hess;
         mm.diagonal().array() += lambda * diag_scale;
         const Eigen::LDLT<Eigen::Matrix2d> ldlt(mm);
-        Eigen::Vector2d step = Eigen::Vector2d::Zero();
-        if (ldlt.info() == Eigen::Success && ldlt.isPositive()) step = -ldlt.solve(grad);
-        const double np = std::clamp(m.yaw_p + step.x(), -range, range);
-        const double nc = std::clamp(m.yaw_c + step.y(), -range, range);
-        const double c = step.allFinite() ? cost(np, nc) : m.cost;
-        if (c < m.cost) {
+        const Eigen::Vector2d step = -ldlt.solve(grad);
+        // Not positive definite (a saddle, or indefinite away from the minimum): damp more.
+        const bool usable = ldlt.info() == Eigen::Success && ldlt.isPositive() &&
+                            step.allFinite() && step.squaredNorm() > 0;
+        const double np = std::clamp(m.yaw_p + (usable ? step.x() : 0.0), -range, range);
+        const double nc = std::clamp(m.yaw_c + (usable ? step.y() : 0.0), -range, range);
+        const double c = usable ? cost(np, nc) : m.cost;
+        if (usable && c < m.cost) {
           improved = true;
           converged = std::abs(np - m.yaw_p) + std::abs(nc - m.yaw_c) < 1e-10;
           m = {np, nc, c};

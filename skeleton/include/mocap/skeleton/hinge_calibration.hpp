@@ -14,13 +14,19 @@
 // frames, which makes them independent of the earth heading. With j = Rz(phi) x in the
 // horizontal plane of the segment frame, |w x j|^2 is linear in (cos 2phi, sin 2phi), so the
 // squared residuals reduce to running sums (a 4x4 quadratic form per hinge, no buffers), and the
-// two yaw offsets are found by a search over +-max_yaw_deg. Corrected calibration:
-// q_sensor_segment <- q_sensor_segment Rz(alpha), q_correction <- Rz(-alpha) q_correction, so
-// that every refined segment reads Rz(e) q_earth_segment with one common heading error e, which
-// cancels in all joint rotations. Segments without an identified hinge get the mean offset. The
-// mean offset is also -e (the N-pose made eps_i - alpha_i = e for every sensor, and the filters'
-// magnetometer heading errors eps_i scatter around zero), so every segment is turned by it:
-// this corrects the body heading (walking direction) too.
+// two yaw offsets are found by a search over +-max_yaw_deg. That residual vanishes to fourth
+// order when a segment turns about the axis itself (|w x j|^2 ~ |w|^2 d^2 for an axis error d,
+// squared again in the cost): an upper arm still while the elbow curls leaves the forearm's yaw
+// on a flat cost that small rate inconsistencies elsewhere (rigid arm raises: filter tilt
+// corrections, sample timing) move by degrees. So where one segment is nearly still, the
+// direction of the relative rate, which is the axis in the other segment's frame, adds the
+// first-order term |w_rel|^2 |w_rel x j|^2 (also linear in cos 2phi, sin 2phi: the same sums).
+// Corrected calibration: q_sensor_segment <- q_sensor_segment Rz(alpha), q_correction <- Rz(-alpha)
+// q_correction, so that every refined segment reads Rz(e) q_earth_segment with one common heading
+// error e, which cancels in all joint rotations. Segments without an identified hinge get the mean
+// offset. The mean offset is also -e (the N-pose made eps_i - alpha_i = e for every sensor, and the
+// filters' magnetometer heading errors eps_i scatter around zero), so every segment is turned by
+// it: this corrects the body heading (walking direction) too.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -45,6 +51,13 @@ struct HingeRefineOptions {
   /// A via pair's sample counts while the joint before its child moves slower than this
   /// fraction of the hinge's relative rate plus min_rate_deg_s / 2.
   double via_still_fraction = 0.25;
+  /// Direction terms: the hinge's relative rate is along the axis in both segment frames, a
+  /// first-order constraint where the rate-norm residual is only fourth-order (a segment turning
+  /// about the axis itself: an upper arm still while the elbow curls, a sagittal knee bend).
+  /// Converting it into one frame mixes in the other segment's rate through the two filters'
+  /// heading difference, so each frame's term is taken only while the other segment's rate is
+  /// at most this fraction of the relative rate. 0 = rate norms only (Seel et al.).
+  double direction_fraction = 0.3;
   /// The parent's yaw is used only if the parent itself turned this much about axes other than
   /// the hinge axis (rotation about the axis alone, or none, leaves its yaw open).
   double min_parent_off_axis_deg = 0;
