@@ -121,7 +121,9 @@ struct DemoConfig {
   std::string path = "device";         ///< "device" (simulated devices via ptys) or "direct"
   std::string protocol = "witmotion";  ///< wire protocol the simulated devices speak
   double rate_hz = 100.0;
-  std::string motion = "sequence";  ///< a virtual-performer motion (sim::motion_names())
+  /// A virtual-performer motion (sim::motion_names(), optionally "calibrate+"): by default the
+  /// calibration procedure (N-pose, knee bends with elbow curls) before the sequence.
+  std::string motion = "calibrate+sequence";
   uint64_t seed = 1;
 };
 
