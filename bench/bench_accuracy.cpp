@@ -194,7 +194,9 @@ int run_accuracy(int argc, char** argv) {
       .option("disturbance", "none|magnet|desk|both, comma list or 'all' (default none,both)")
       .option("seed", "random seed (default 1)")
       .option("rate", "sensor rate in Hz (default 100)")
-      .option("heading", "calibration heading source: pelvis|normals|mean|truth (default pelvis)")
+      .option(
+          "heading",
+          "calibration heading source: normals|pelvis|mean|truth (default normals, as the daemon)")
       .flag(
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
@@ -235,14 +237,16 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   base.seed = static_cast<uint64_t>(seed);
-  const std::string heading = args.get_or("heading", "pelvis");
+  const std::string heading = args.get_or("heading", "normals");
   if (heading == "normals")
     base.heading = HeadingSource::mount_normals;
+  else if (heading == "pelvis")
+    base.heading = HeadingSource::pelvis_sensor;
   else if (heading == "mean")
     base.heading = HeadingSource::mean_sensors;
   else if (heading == "truth")
     base.heading = HeadingSource::explicit_heading;
-  else if (heading != "pelvis") {
+  else {
     std::fprintf(stderr,
                  "mocap bench accuracy: --heading must be normals, pelvis, mean or truth\n");
     return 2;

@@ -175,6 +175,24 @@ class TableReader {
     out = *n->value<bool>();
   }
 
+  /// A direction: an array of three finite numbers, not all zero.
+  void direction(std::string_view key, std::optional<std::array<double, 3>>& out) {
+    const toml::node* n = node(key);
+    if (!n) return;
+    const toml::array* a = n->as_array();
+    std::array<double, 3> v{};
+    bool ok = a && a->size() == 3;
+    for (size_t i = 0; ok && i < 3; ++i) {
+      const auto x = (*a)[i].value<double>();
+      ok = (*a)[i].is_number() && x && std::isfinite(*x);
+      if (ok) v[i] = *x;
+    }
+    if (!ok) return type_error(n, key, "an array of three numbers [x, y, z]");
+    if (std::hypot(v[0], v[1], v[2]) < 1e-6)
+      return ctx_.add(n, join(path_, key), "is the zero vector (needs a direction)");
+    out = v;
+  }
+
   /// A sub-table (nullptr if absent or not a table; the latter is reported).
   const toml::table* table(std::string_view key) {
     const toml::node* n = node(key);
@@ -281,6 +299,7 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
   r.num("rate_hz", s.rate_hz, 0, 10000);
   r.str("segment", s.segment);
   r.str("axis_remap", s.axis_remap);
+  r.direction("site_normal", s.site_normal);
   r.str("log_level", s.log_level, {"trace", "debug", "info", "warn", "error", "off"});
   if (const toml::table* opts = r.table("options")) {
     for (const auto& [k, v] : *opts) {
@@ -399,6 +418,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     k.str("file", c.calibration.file);
     k.boolean("refine_hinges", c.calibration.refine_hinges);
     k.boolean("heading_coupling", c.calibration.heading_coupling);
+    k.str("heading", c.calibration.heading, {"mount_normals", "pelvis_sensor", "mean_sensors"});
     k.finish();
   }
   if (const toml::table* outs = r.table("outputs")) {
@@ -643,7 +663,8 @@ std::string config_to_toml(const Config& c) {
                                          {"capture_s", c.calibration.capture_s},
                                          {"file", c.calibration.file},
                                          {"refine_hinges", c.calibration.refine_hinges},
-                                         {"heading_coupling", c.calibration.heading_coupling}});
+                                         {"heading_coupling", c.calibration.heading_coupling},
+                                         {"heading", c.calibration.heading}});
   toml::table outs;
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
                                   {"bind", c.outputs.json.bind},
@@ -671,6 +692,9 @@ std::string config_to_toml(const Config& c) {
                   {"rate_hz", s.rate_hz},    {"segment", s.segment}, {"axis_remap", s.axis_remap},
                   {"log_level", s.log_level}};
     if (!s.port.empty()) t.insert("port", s.port);
+    if (s.site_normal)
+      t.insert("site_normal",
+               toml::array{(*s.site_normal)[0], (*s.site_normal)[1], (*s.site_normal)[2]});
     if (s.vid >= 0) {
       t.insert("vid", s.vid);
       t.insert("pid", s.pid);

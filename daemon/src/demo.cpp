@@ -104,7 +104,9 @@ class DemoService final : public Service {
                 static_cast<unsigned long long>(overruns_));
   }
 
-  // The performer's belt-clip pelvis sensor gives the heading axis (docs/sim.md). The capture
+  // The performer straps its sensors on the standard sites (calibration.heading =
+  // "mount_normals", the default); with "pelvis_sensor" its belt clip's axis is the heading axis
+  // (docs/sim.md). The capture
   // ends kCalibMarginS before the stand does; the countdown is shortened if the first stand
   // cannot hold countdown + capture after the filters have had kCalibSettleS to converge.
   void plan_calibration(Config& cfg) {

@@ -9,6 +9,7 @@
 #include "mocap/filter/filter_param_names.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
+#include "mocap/skeleton/sensor_sites.hpp"
 
 namespace mocap::daemon {
 
@@ -35,9 +36,26 @@ SkeletonOptions skeleton_options(const Config& cfg) {
 CalibratorOptions calibrator_options(const Config& cfg) {
   CalibratorOptions o;
   o.capture_s = cfg.calibration.capture_s;
-  o.heading = HeadingSource::pelvis_sensor;
   const auto& a = cfg.calibration.heading_axis_sensor;
   o.heading_axis_sensor = Eigen::Vector3d(a[0], a[1], a[2]);
+  if (cfg.calibration.heading == "mean_sensors") {
+    o.heading = HeadingSource::mean_sensors;
+  } else if (cfg.calibration.heading == "mount_normals") {
+    // A sensor lies flat on its site: its z axis is the site's outward normal.
+    o.heading = HeadingSource::mount_normals;
+    o.heading_axis_sensor = Eigen::Vector3d::UnitZ();
+    for (const auto& s : cfg.sensors) {
+      const auto seg = segment_from_name(s.segment);
+      if (!seg) continue;
+      o.mount_normal_body[index(*seg)] =
+          s.site_normal
+              ? Eigen::Vector3d((*s.site_normal)[0], (*s.site_normal)[1], (*s.site_normal)[2])
+                    .normalized()
+              : standard_site_normal_body(*seg);
+    }
+  } else {
+    o.heading = HeadingSource::pelvis_sensor;
+  }
   return o;
 }
 

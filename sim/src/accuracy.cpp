@@ -14,6 +14,7 @@
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
+#include "mocap/skeleton/sensor_sites.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
 namespace mocap::sim {
@@ -72,7 +73,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   if (o.heading == HeadingSource::mount_normals) {
     copt.heading_axis_sensor = Eigen::Vector3d::UnitZ();  // a strapped sensor's z: the normal
     for (int s = 0; s < kSegmentCount; ++s)
-      copt.mount_normal_body[s] = mount_normal_segment(static_cast<Segment>(s));
+      copt.mount_normal_body[s] = standard_site_normal_body(static_cast<Segment>(s));
   }
   Calibrator calibrator(rig, copt);
   SkeletonOptions sopt;

@@ -1,6 +1,7 @@
 // Virtual IMU error model, magnetic field and sensor mounting (see sensor_model.hpp).
 #include "mocap/sim/sensor_model.hpp"
 #include "mocap/core/units.hpp"
+#include "mocap/skeleton/sensor_sites.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -64,35 +65,6 @@ double site_side(Segment seg) {
 }
 }  // namespace
 
-Eigen::Vector3d mount_normal_segment(Segment seg) {
-  using V = Eigen::Vector3d;
-  const double side = site_side(seg);
-  switch (seg) {
-    case Segment::pelvis:
-    case Segment::neck:
-      return -V::UnitX();
-    case Segment::torso:
-    case Segment::shank_l:
-    case Segment::shank_r:
-      return V::UnitX();
-    case Segment::upper_arm_l:
-    case Segment::upper_arm_r:
-    case Segment::forearm_l:
-    case Segment::forearm_r:
-    case Segment::hand_l:
-    case Segment::hand_r:
-      return side * V::UnitY();
-    case Segment::thigh_l:
-    case Segment::thigh_r:
-      return V(1, 0.4 * side, 0).normalized();
-    case Segment::head:
-    case Segment::foot_l:
-    case Segment::foot_r:
-      break;
-  }
-  return V::UnitZ();
-}
-
 SensorMount make_mount(Segment seg, const BodyDimensions& dims, const SensorModelParams& p,
                        std::mt19937_64& rng) {
   using V = Eigen::Vector3d;
@@ -100,7 +72,7 @@ SensorMount make_mount(Segment seg, const BodyDimensions& dims, const SensorMode
   const V end = dims.end_offset_m[index(seg)];
   const double side = site_side(seg);
   V r = V::Zero();
-  const V normal = mount_normal_segment(seg);
+  const V normal = standard_site_normal_body(seg);
   switch (seg) {
     case Segment::pelvis:
       r = V(-0.10 * s, 0, 0.05 * s);

@@ -33,6 +33,7 @@ vid = 0x2639
 pid = 0x0300
 segment = "thigh_l"
 axis_remap = "-y,x,z"
+site_normal = [0.0, 1.0, 0.0]
 [sensor.options]
 quat_order = "wxyz"
 )";
@@ -57,6 +58,34 @@ TEST(Config, HeadingCouplingCanBeTurnedOff) {
   EXPECT_FALSE(c->calibration.heading_coupling);
   auto bad = parse("[calibration]\nheading_coupling = 3\n", errs);
   EXPECT_FALSE(bad);
+}
+
+TEST(Config, CalibrationHeadingSourceAndSiteNormals) {
+  ConfigErrors errs;
+  auto d = parse("", errs);
+  ASSERT_TRUE(d) << errs.to_string();
+  EXPECT_EQ(d->calibration.heading, "mount_normals");  // the default
+  auto c = parse(kRig, errs, {"calibration.heading=pelvis_sensor"});
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_EQ(c->calibration.heading, "pelvis_sensor");
+  EXPECT_FALSE(c->sensors[0].site_normal);  // the segment's standard site
+  ASSERT_TRUE(c->sensors[1].site_normal);
+  EXPECT_DOUBLE_EQ((*c->sensors[1].site_normal)[1], 1.0);
+  // A misspelt source names the key and suggests the nearest.
+  ConfigErrors e1;
+  EXPECT_FALSE(parse("[calibration]\nheading = \"mount_normal\"\n", e1));
+  EXPECT_NE(e1.to_string().find("rig.toml:2:11: calibration.heading"), std::string::npos)
+      << e1.to_string();
+  EXPECT_NE(e1.to_string().find("did you mean 'mount_normals'"), std::string::npos);
+  // A normal must be three numbers, not all zero; the error names the sensor and the line.
+  for (const char* bad : {"[0, 0, 0]", "[1, 0]", "\"up\"", "[1, \"a\", 0]"}) {
+    std::string rig = kRig;
+    rig.replace(rig.find("[0.0, 1.0, 0.0]"), 15, bad);
+    ConfigErrors e2;
+    EXPECT_FALSE(parse(rig, e2)) << bad;
+    EXPECT_NE(e2.to_string().find("rig.toml:18:15: sensor[1].site_normal"), std::string::npos)
+        << e2.to_string();
+  }
 }
 
 TEST(Config, ReadsSensors) {
@@ -187,6 +216,7 @@ TEST(Config, PrintedConfigParsesBackIdentically) {
   const std::string again = config_to_toml(*c2);
   EXPECT_EQ(again.substr(again.find('\n')), printed.substr(printed.find('\n')));
   EXPECT_EQ(c2->sensors[1].axis_remap, "-y,x,z");
+  EXPECT_EQ(c2->sensors[1].site_normal, c->sensors[1].site_normal);
 }
 
 TEST(Config, ExampleRigsAreValid) {

@@ -27,6 +27,11 @@ struct SensorConfig {
   double rate_hz = 0;      ///< requested device output rate (0 = device default)
   std::string segment;     ///< body segment it drives ("" = not attached)
   std::string axis_remap = "x,y,z";
+  /// Outward normal of the skin where the sensor lies (body frame in the N-pose: x forward,
+  /// y left, z up) when it is not the segment's standard site (skeleton/sensor_sites.hpp); the
+  /// sensor's z axis (after axis_remap) lies along it. Used by calibration.heading =
+  /// "mount_normals".
+  std::optional<std::array<double, 3>> site_normal;
   std::string log_level = "info";
   std::map<std::string, std::string> options;  ///< protocol options
 };
@@ -55,9 +60,14 @@ struct CalibrationConfig {
   /// Kinematic heading coupling at the knees and elbows (skeleton/heading_coupling.hpp): keeps
   /// each hinge's two sensors on one heading while their filters' headings drift apart.
   bool heading_coupling = true;
-  /// Body forward (+x) in the pelvis sensor's frame: the heading axis of a calibration. Not a
-  /// file key: the default suits a pelvis sensor worn with +x forward; the demo sets its
-  /// performer's belt-clip axis.
+  /// Where the calibration's body heading comes from: "mount_normals" (every sensor lies flat
+  /// on its site with z out of the skin; the heading is the circular mean over the sites'
+  /// normals, so one sensor's misalignment counts 1/N), "pelvis_sensor" (the pelvis sensor's
+  /// heading_axis_sensor points forward) or "mean_sensors" (that axis of every sensor does).
+  std::string heading = "mount_normals";
+  /// Body forward (+x) in the pelvis sensor's frame: the heading axis of a pelvis_sensor or
+  /// mean_sensors calibration. Not a file key: the default suits a pelvis sensor worn with +x
+  /// forward; the demo sets its performer's belt-clip axis.
   std::array<double, 3> heading_axis_sensor{1.0, 0.0, 0.0};
 };
 
@@ -111,7 +121,9 @@ struct DemoConfig {
   std::string path = "device";         ///< "device" (simulated devices via ptys) or "direct"
   std::string protocol = "witmotion";  ///< wire protocol the simulated devices speak
   double rate_hz = 100.0;
-  std::string motion = "sequence";  ///< a virtual-performer motion (sim::motion_names())
+  /// A virtual-performer motion (sim::motion_names(), optionally "calibrate+"): by default the
+  /// calibration procedure (N-pose, knee bends with elbow curls) before the sequence.
+  std::string motion = "calibrate+sequence";
   uint64_t seed = 1;
 };
 

@@ -27,11 +27,11 @@ struct AccuracyOptions {
   /// and lasts capture_s (must end inside the stand).
   double settle_s = 0.8;
   double capture_s = 2.0;
-  /// Body-heading source of the N-pose calibration: pelvis_sensor (default) takes the belt
-  /// clip's forward axis alone (its misalignment becomes every mounting's yaw); mount_normals
-  /// the circular mean over the sensors' known mount normals (mount_normal_segment); explicit
-  /// 0 = the truth. docs/accuracy.md compares them.
-  HeadingSource heading = HeadingSource::pelvis_sensor;
+  /// Body-heading source of the N-pose calibration: mount_normals (default, as the daemon) the
+  /// circular mean over the sensors' site normals (skeleton/sensor_sites.hpp); pelvis_sensor
+  /// the belt clip's forward axis alone (its misalignment becomes every mounting's yaw);
+  /// explicit 0 = the truth. docs/accuracy.md compares them.
+  HeadingSource heading = HeadingSource::mount_normals;
   double explicit_heading_deg = 0;
   /// Hinge-motion refinement of the calibration (on by default, as in the daemon).
   HingeRefineOptions hinge_refine{};

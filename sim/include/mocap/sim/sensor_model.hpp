@@ -80,13 +80,9 @@ inline Eigen::Vector3d pelvis_forward_axis_sensor() {
   return -Eigen::Vector3d::UnitZ();
 }
 
-/// The outward normal of the nominal sensor site on each segment (segment frame = body frame in
-/// the N-pose): the mounted sensor's z axis before misalignment. What a calibration from the
-/// mount normals (HeadingSource::mount_normals) is told.
-Eigen::Vector3d mount_normal_segment(Segment s);
-
-/// The nominal surface point and outward normal (segment frame) where a sensor goes on each
-/// segment, scaled to the body; then strap roll and misalignment drawn from `rng`.
+/// The nominal surface point where a sensor goes on each segment (segment frame), scaled to the
+/// body, lying flat with its z axis along the standard site's outward normal
+/// (skeleton/sensor_sites.hpp); then strap roll and misalignment drawn from `rng`.
 SensorMount make_mount(Segment s, const BodyDimensions& dims, const SensorModelParams& p,
                        std::mt19937_64& rng);
 
