@@ -168,8 +168,9 @@ TEST(Accuracy, TurnKeepsTheKneeYawsTheMovesIdentified) {
   // with a rigid hinge by ~50x the moves' (hard-iron heading corrections, gyro scale errors,
   // rates of thigh and shank from instants apart), and unweighted its residuals moved the left
   // thigh and shank by 6 and 9 deg (mount yaw errors 5.3 / 8.0 deg, knee 3.03 deg). With each
-  // block weighted by its own residual level: <= 0.63 deg, knee 2.58 deg (the rest is the two
-  // filters' heading drifting apart by ~3 deg during the turn: docs/accuracy.md).
+  // block weighted by its own residual level: <= 0.63 deg, knee 2.58 deg; the rest is the two
+  // filters' heading drifting apart by ~3 deg during the turn, which the heading coupling
+  // follows with its 1 s time constant (3 s: 2.58; docs/accuracy.md): knee 1.94 deg.
   AccuracyOptions o;
   o.motion = "turn";
   o.seed = 4;
@@ -180,7 +181,7 @@ TEST(Accuracy, TurnKeepsTheKneeYawsTheMovesIdentified) {
   EXPECT_EQ(r.hinges_identified, 4);
   for (Segment s : {Segment::thigh_l, Segment::shank_l, Segment::thigh_r, Segment::shank_r})
     EXPECT_LT(std::abs(r.mount_yaw_error_deg[index(s)]), 1.0) << name(s);
-  EXPECT_LE(r.joint_rmse_deg[index(Segment::shank_l)], 2.8);  // target 2: missed, guard
+  EXPECT_LE(r.joint_rmse_deg[index(Segment::shank_l)], 2.0);  // target, met (1.94)
 }
 
 TEST(Accuracy, ArmRaiseThroughNinetyDegreesWithRealisticSensors) {
