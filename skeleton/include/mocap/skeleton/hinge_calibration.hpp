@@ -21,6 +21,9 @@
 // corrections, sample timing) move by degrees. So where one segment is nearly still, the
 // direction of the relative rate, which is the axis in the other segment's frame, adds the
 // first-order term |w_rel|^2 |w_rel x j|^2 (also linear in cos 2phi, sin 2phi: the same sums).
+// The sums are built in blocks, each weighted by the inverse of its own mean squared residual at
+// its own best yaws (HingeRefineOptions::noise_weighting): motion whose rates fit a rigid hinge
+// badly (a turn on the spot) does not outweigh clean flexion.
 // Corrected calibration: q_sensor_segment <- q_sensor_segment Rz(alpha), q_correction <- Rz(-alpha)
 // q_correction, so that every refined segment reads Rz(e) q_earth_segment with one common heading
 // error e, which cancels in all joint rotations. Segments without an identified hinge get the mean
