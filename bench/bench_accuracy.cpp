@@ -215,7 +215,8 @@ int run_accuracy(int argc, char** argv) {
       .option("refine-param",
               "HingeRefineOptions overrides, comma list of name=value (min_travel_deg, "
               "max_yaw_deg, min_rate_deg_s, via_still_fraction, "
-              "min_parent_off_axis_deg, basin_margin, direction_fraction)")
+              "min_parent_off_axis_deg, basin_margin, direction_fraction, noise_weighting (0|1), "
+              "block_min_samples, block_noise_floor)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
               "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)")
@@ -267,8 +268,13 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   if (args.has("no-carry")) base.heading_coupling.carry_distal = false;
   HingeRefineOptions& h = base.hinge_refine;
+  double noise_weighting = h.noise_weighting ? 1 : 0;
+  double block_min_samples = h.block_min_samples;
   if (!set_params(args.get_or("refine-param", ""), "refine-param",
-                  {{"min_travel_deg", &h.min_travel_deg},
+                  {{"noise_weighting", &noise_weighting},
+                   {"block_min_samples", &block_min_samples},
+                   {"block_noise_floor", &h.block_noise_floor},
+                   {"min_travel_deg", &h.min_travel_deg},
                    {"max_yaw_deg", &h.max_yaw_deg},
                    {"min_rate_deg_s", &h.min_rate_deg_s},
                    {"via_still_fraction", &h.via_still_fraction},
@@ -276,6 +282,8 @@ int run_accuracy(int argc, char** argv) {
                    {"min_parent_off_axis_deg", &h.min_parent_off_axis_deg},
                    {"basin_margin", &h.basin_margin}}))
     return 2;
+  h.noise_weighting = noise_weighting != 0;
+  h.block_min_samples = static_cast<int>(block_min_samples);
   if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();

@@ -39,6 +39,7 @@ HingeAxisRefiner::HingeAxisRefiner(RigMapping rig, HingeRefineOptions options)
 
 void HingeAxisRefiner::reset() {
   sums_.fill(Sums{});
+  block_.fill(Quad{});
   est_.fill(HingeEstimate{});
   n_estimated_.fill(0);
   applied_.fill(false);
@@ -109,6 +110,7 @@ void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& 
       if (w_joint > opt_.via_still_fraction * rel + 0.5 * min_rate) continue;
     }
     Sums& s = sums_[h];
+    Quad& blk = block_[h];  // the residuals go into the open block (noise weighting)
     // Direction terms (header): the relative rate's direction is the axis in a segment's frame
     // while the other segment is nearly still.
     const double fd = opt_.direction_fraction;
@@ -117,9 +119,9 @@ void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& 
       Eigen::Vector2d u;
       perp_terms(w_axis, k, u);
       const double wt = w_axis.squaredNorm();
-      s.g.segment<2>(part) += 0.5 * wt * u;
-      s.s += wt * k;
-      s.scale += wt * wt;
+      blk.g.segment<2>(part) += 0.5 * wt * u;
+      blk.s += wt * k;
+      blk.scale += wt * wt;
     };
     if (fd > 0 && rel > min_rate) {
       if (wp.norm() <= fd * rel) add_direction(w_rel, 2);
@@ -132,17 +134,38 @@ void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& 
     perp_terms(wc, kc, uc);
     const Eigen::Vector4d a(up.x(), up.y(), -uc.x(), -uc.y());
     const double b = kp - kc;
-    s.h.noalias() += a * a.transpose();
-    s.g += a * b;
-    s.s += b * b;
+    blk.h.noalias() += a * a.transpose();
+    blk.g += a * b;
+    blk.s += b * b;
     const double sc = wp.squaredNorm() + wc.squaredNorm();
-    s.scale += sc * sc;
+    blk.scale += sc * sc;
+    ++blk.n;
     s.travel_rad += rel * dt_w_s_[c];
     // The parent's rotation about axes other than the hinge axis (y) while the hinge flexes:
     // what pins the parent's yaw.
     if (rel > 2 * min_rate) s.parent_travel_rad += std::hypot(wp.x(), wp.z()) * dt_w_s_[c];
-    ++s.n;
+    ++s.n_added;
   }
+}
+
+void HingeAxisRefiner::close_block(size_t h) {
+  Quad& b = block_[h];
+  double w = 1;
+  if (opt_.noise_weighting) {
+    // The block's own noise: its mean squared residual at its own best yaws (two fitted
+    // parameters), floored relative to its rate scale.
+    const double range = opt_.max_yaw_deg * kDegToRad;
+    const YawFit f = fit(b.h, b.g, b.s, range, false, 0, 0, 0, -1);
+    const double floor = std::max(opt_.block_noise_floor * b.scale, 1e-300);
+    w = std::max(b.n - 2, 1) / std::max(f.cost, floor);
+  }
+  Sums& s = sums_[h];
+  s.h.noalias() += w * b.h;
+  s.g += w * b.g;
+  s.s += w * b.s;
+  s.scale += w * b.scale;
+  s.n += b.n;
+  b = Quad{};
 }
 
 bool HingeAxisRefiner::estimate(int hinge, double ref_yaw_p, double ref_yaw_c, double margin,
@@ -318,6 +341,10 @@ bool HingeAxisRefiner::update(int64_t t_ns) {
   const auto margin = [&](size_t h) {
     return opt_.basin_margin < 0 || applied_[h] ? opt_.basin_margin : 0.0;
   };
+  // Close the open blocks (one per update interval; a block with too few samples stays open).
+  const int min_block = opt_.noise_weighting ? std::max(opt_.block_min_samples, 3) : 1;
+  for (size_t h = 0; h < kRefinePairs.size(); ++h)
+    if (block_[h].n >= min_block) close_block(h);
   for (size_t h = 0; h < kRefinePairs.size(); ++h) {
     // Re-estimate only pairs with new data (the search is ~10^4 cost evaluations).
     if (sums_[h].n != n_estimated_[h]) {

@@ -57,7 +57,7 @@ namespace mocap {
 
 struct HeadingCouplingOptions {
   bool enabled = false;
-  double tau_s = 3.0;                   ///< time constant, counted over observable time
+  double tau_s = 1.0;                   ///< time constant, counted over observable time
   double min_flex_deg = 20;             ///< joint rotation below this: not observable
   double min_axis_horizontal = 0.5;     ///< |horizontal part| of both unit axes at least this
   double max_elevation_mismatch = 0.1;  ///< |a_parent.z - a_child.z| at most this
@@ -70,7 +70,7 @@ struct HeadingCouplingOptions {
   /// and wrist keep what the filters measured.
   bool carry_distal = true;
   /// Candidate frames kept per hinge for rebase() (0: no history, an offset keeps what it learnt
-  /// under earlier calibrations). 2048 at 100 Hz is ~7 tau_s of flexed time.
+  /// under earlier calibrations). 2048 at 100 Hz is ~20 tau_s of flexed time.
   int history_samples = 2048;
   /// A frame is kept when the joint angle is at least this fraction of min_flex_deg (a
   /// calibration change moves the angle by a few degrees; the replay applies the exact gate).

@@ -21,6 +21,9 @@
 // corrections, sample timing) move by degrees. So where one segment is nearly still, the
 // direction of the relative rate, which is the axis in the other segment's frame, adds the
 // first-order term |w_rel|^2 |w_rel x j|^2 (also linear in cos 2phi, sin 2phi: the same sums).
+// The sums are built in blocks, each weighted by the inverse of its own mean squared residual at
+// its own best yaws (HingeRefineOptions::noise_weighting): motion whose rates fit a rigid hinge
+// badly (a turn on the spot) does not outweigh clean flexion.
 // Corrected calibration: q_sensor_segment <- q_sensor_segment Rz(alpha), q_correction <- Rz(-alpha)
 // q_correction, so that every refined segment reads Rz(e) q_earth_segment with one common heading
 // error e, which cancels in all joint rotations. Segments without an identified hinge get the mean
@@ -71,6 +74,21 @@ struct HingeRefineOptions {
   /// Default: the former search (-1); 0.02 wins the ambiguous arm raise cell but loses two other
   /// targets on the accuracy grid (docs/accuracy.md, "Ambiguous minima"), so it is opt-in.
   double basin_margin = -1;
+  /// Noise weighting: the residuals are summed in blocks (one per update_interval_s, extended
+  /// until it holds block_min_samples), and each block enters the fit with the inverse of its own
+  /// mean squared residual at its own best yaws (weighted least squares with the noise level
+  /// estimated per block). Motion whose rates are inconsistent with a rigid hinge by more than
+  /// the filters' usual error (a turn on the spot: heading corrections of the magnetometer and
+  /// gyro scale errors on the large common rate about the vertical, rates of the two segments
+  /// from different instants at high angular acceleration) then no longer outweighs clean
+  /// flexion; measured in docs/skeleton.md. false = every residual weighs the same (the former
+  /// fit).
+  bool noise_weighting = true;
+  int block_min_samples = 20;
+  /// Floor of a block's mean squared residual relative to its mean squared rate scale
+  /// ((|w_p|^2 + |w_c|^2)^2): a block that fits almost exactly (ideal sensors) is not given an
+  /// unbounded weight. 1e-9 ~ a relative rate inconsistency of 3e-5.
+  double block_noise_floor = 1e-9;
 };
 
 /// One hinge's identification state (for diagnostics and the daemon's status).
@@ -155,15 +173,23 @@ class HingeAxisRefiner {
                            double common_rad);
 
  private:
-  struct Sums {
+  /// The quadratic form of a pair's squared residuals (weighted sums in sums_, the open
+  /// block's unweighted ones in block_).
+  struct Quad {
     Eigen::Matrix4d h = Eigen::Matrix4d::Zero();  ///< sum a a^T
     Eigen::Vector4d g = Eigen::Vector4d::Zero();  ///< sum a b
     double s = 0;                                 ///< sum b^2
     double scale = 0;                             ///< sum of (|w_p|^2 + |w_c|^2)^2
+    int n = 0;                                    ///< samples
+  };
+  struct Sums : Quad {
     double travel_rad = 0;
     double parent_travel_rad = 0;  ///< the parent's own rotation over the same samples
-    int n = 0;
+    int n_added = 0;               ///< samples added (folded into the fit or in the open block)
   };
+  /// Folds pair h's open block into its sums with the block's noise weight (noise_weighting) or
+  /// weight 1, and empties it.
+  void close_block(size_t h);
   /// Fits pair `hinge` with the applied yaws (rad) as the basin reference.
   bool estimate(int hinge, double ref_yaw_p, double ref_yaw_c, double margin,
                 HingeEstimate& out) const;
@@ -171,6 +197,7 @@ class HingeAxisRefiner {
   RigMapping rig_;
   HingeRefineOptions opt_;
   std::array<Sums, kRefinePairs.size()> sums_{};
+  std::array<Quad, kRefinePairs.size()> block_{};
   std::array<HingeEstimate, kRefinePairs.size()> est_{};
   std::array<int, kRefinePairs.size()> n_estimated_{};  ///< sums_[h].n at the last estimate
   std::array<bool, kRefinePairs.size()> applied_{};     ///< the pair's offsets are in use
