@@ -3,6 +3,7 @@
 // motion and removed, so joint rotations come out right; without flexion nothing changes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -22,26 +23,34 @@ double angle_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
 
 // Joint rotations of a person walking on the spot: pelvis turning and rocking, hips and
 // shoulders swinging with some ab/adduction, knees and elbows flexing (pure hinges about y).
-std::array<Eigen::Quaterniond, kSegmentCount> joints_at(double t, bool flex) {
+// With `curls` instead: the arms hanging (slow ab/adduction only) while the elbows curl, the
+// wrists straight for 5 s, then following the elbows: flexion along the elbow's axis (0.3 of
+// the elbow's angle) and deviation off it (0.12), as in a curl with the hand following.
+std::array<Eigen::Quaterniond, kSegmentCount> joints_at(double t, bool flex, bool curls = false) {
   std::array<Eigen::Quaterniond, kSegmentCount> j;
   j.fill(Eigen::Quaterniond::Identity());
   const double w = 2 * M_PI * 0.9;
   j[0] = yaw_rotation(0.3 * std::sin(0.4 * t)) * axis_rotation(1, 0.1 * std::sin(w * t));
   j[index(Segment::torso)] = axis_rotation(1, 0.1 * std::sin(0.5 * t));
+  // The wrists' share of the elbow's angle: 0 until 5 s, then a smooth ramp to 1 at 7 s.
+  const double x = std::clamp((t - 5) / 2, 0.0, 1.0), wrist = curls ? x * x * (3 - 2 * x) : 0.0;
   for (int side = 0; side < 2; ++side) {
     const double ph = side * M_PI, sgn = side ? -1.0 : 1.0;
     const Segment thigh = side ? Segment::thigh_r : Segment::thigh_l;
     const Segment shank = side ? Segment::shank_r : Segment::shank_l;
     const Segment arm = side ? Segment::upper_arm_r : Segment::upper_arm_l;
     const Segment fore = side ? Segment::forearm_r : Segment::forearm_l;
+    const Segment hand = side ? Segment::hand_r : Segment::hand_l;
     j[index(thigh)] = axis_rotation(1, -0.4 * std::sin(w * t + ph)) *
                       axis_rotation(0, sgn * 0.1 * std::sin(0.7 * t));
-    j[index(arm)] = axis_rotation(1, 0.5 * std::sin(w * t + ph)) *
+    j[index(arm)] = axis_rotation(1, (curls ? 0.0 : 0.5) * std::sin(w * t + ph)) *
                     axis_rotation(0, sgn * 0.2 * (1 + std::sin(0.3 * t)));
-    const double knee = flex ? 0.6 * (1 - std::cos(w * t + ph)) : 0.0;
-    const double elbow = flex ? 0.7 * (1 - std::cos(0.8 * t + ph)) : 0.0;
+    const double knee = flex && !curls ? 0.6 * (1 - std::cos(w * t + ph)) : 0.0;
+    const double elbow = flex ? 0.7 * (1 - std::cos((curls ? 1.6 : 0.8) * t + ph)) : 0.0;
     j[index(shank)] = axis_rotation(1, knee);
     j[index(fore)] = axis_rotation(1, -elbow);
+    j[index(hand)] =
+        axis_rotation(1, -0.3 * wrist * elbow) * axis_rotation(0, sgn * 0.12 * wrist * elbow);
   }
   return j;
 }
@@ -78,9 +87,10 @@ struct RunResult {
   int valid_hinges = 0;
 };
 
-RunResult run(const HingeRig& s, bool refine, bool flex, std::mt19937& rng,
-              Skeleton* out = nullptr) {
+RunResult run(const HingeRig& s, bool refine, bool flex, std::mt19937& rng, Skeleton* out = nullptr,
+              bool curls = false, HingeRefineOptions refine_opt = {}) {
   SkeletonOptions opt;
+  opt.hinge_refine = refine_opt;
   opt.hinge_refine.enabled = refine;
   Skeleton sk(BodyModel(BodyModelConfig{}), default_joint_limits(), RigMapping::full(), opt);
   sk.set_calibration(s.calibration);
@@ -91,11 +101,11 @@ RunResult run(const HingeRig& s, bool refine, bool flex, std::mt19937& rng,
   std::array<Eigen::Quaterniond, kSegmentCount> q_joint_true;
   for (int k = 0; k <= 1500; ++k) {  // 15 s at 100 Hz
     const int64_t t = k * 10 * kMs;
-    q_joint_true = joints_at(t * 1e-9, flex);
+    q_joint_true = joints_at(t * 1e-9, flex, curls);
     for (int i = 0; i < kSegmentCount; ++i) {
       if (u(rng) < 0.01) continue;  // dropped sample
       const int64_t ts = t + jitter_us(rng) * 1000;
-      const auto q_earth = test::earth_from_joints(joints_at(ts * 1e-9, flex));
+      const auto q_earth = test::earth_from_joints(joints_at(ts * 1e-9, flex, curls));
       const Eigen::Quaterniond q_sensor =
           yaw_rotation(s.eps_rad[i]) * q_earth[i] * s.q_sensor_segment[i].conjugate();
       sk.set_sensor_orientation(i, q_sensor, ts);
@@ -153,6 +163,46 @@ TEST(HingeCalibration, IdentifiesYawOffsetsAndCorrectsJoints) {
   for (size_t h = 0; h < kRefineHingeCount; ++h) {
     EXPECT_TRUE(sk.hinge_refiner().hinges()[h].valid);
     EXPECT_GT(sk.hinge_refiner().hinges()[h].travel_deg, 150);
+  }
+}
+
+double mount_yaw_error_deg(const HingeRig& s, const Skeleton& sk, Segment seg) {
+  const Eigen::Quaterniond d =
+      s.q_sensor_segment[index(seg)].conjugate() * sk.calibration().q_sensor_segment[index(seg)];
+  const Eigen::Vector3d x = d * Eigen::Vector3d::UnitX();
+  return std::atan2(x.y(), x.x()) * kRadToDeg;
+}
+
+// Wrists flexing and deviating with the elbows while the arms hang: the hand's fit through the
+// elbow admits samples whose wrist rate is below via_still_fraction of the elbow's, and their
+// deviation off the elbow's axis tilts the hand's apparent axis. The noise weighting gives
+// those blocks (inconsistent with a rigid wrist) little weight against the clean curls of the
+// first 5 s. (A strict gate on the wrist's rate off the elbow's axis, built and measured
+// alongside, fixed this too but added one grid target on top of the weighting: not kept,
+// docs/accuracy.md "The wrist".)
+TEST(HingeCalibration, WristMovingWithTheElbowDoesNotBiasTheHand) {
+  std::mt19937 rng(7);
+  const HingeRig s = make_setup(rng, 6.0);
+  SkeletonOptions opt;
+  Skeleton weighted(BodyModel(BodyModelConfig{}), default_joint_limits(), RigMapping::full(), opt);
+  Skeleton unweighted = weighted;
+  std::mt19937 rng_a(11), rng_b(11);
+  run(s, true, true, rng_a, &weighted, true);
+  HingeRefineOptions no_weighting;
+  no_weighting.noise_weighting = false;
+  run(s, true, true, rng_b, &unweighted, true, no_weighting);
+  for (Segment hand : {Segment::hand_l, Segment::hand_r}) {
+    const double e_weighted = mount_yaw_error_deg(s, weighted, hand);
+    const double e_unweighted = mount_yaw_error_deg(s, unweighted, hand);
+    RecordProperty(std::string(kSegmentNames[index(hand)]) + "_yaw_error_deg",
+                   std::to_string(e_weighted));
+    RecordProperty(std::string(kSegmentNames[index(hand)]) + "_unweighted_yaw_error_deg",
+                   std::to_string(e_unweighted));
+    // Measured: hand_l 0.25, hand_r -0.09 deg (unweighted: 4.54, -4.80).
+    EXPECT_LT(std::abs(e_weighted), 1.0) << kSegmentNames[index(hand)];
+    EXPECT_LT(std::abs(e_weighted), std::abs(e_unweighted) / 4) << kSegmentNames[index(hand)];
+    // The scenario does bias the unweighted fit (else this test would prove nothing).
+    EXPECT_GT(std::abs(e_unweighted), 3.0) << kSegmentNames[index(hand)];
   }
 }
 
