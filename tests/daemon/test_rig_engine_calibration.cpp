@@ -39,38 +39,34 @@ double max_quat_diff(const Calibration& a, const Calibration& b) {
   return d;
 }
 
-TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
-  const fs::path file =
-      fs::temp_directory_path() / ("mocap-refined-calib-" + std::to_string(getpid()) + ".toml");
-  fs::remove(file);
-  ConfigErrors errs;
-  std::optional<Config> parsed = parse_config("", "<defaults>", {}, errs);
-  ASSERT_TRUE(parsed) << errs.to_string();
-  Config cfg = *parsed;
-  cfg.calibration.file = file.string();
-  const Eigen::Vector3d axis = sim::pelvis_forward_axis_sensor();
-  cfg.calibration.heading_axis_sensor = {axis.x(), axis.y(), axis.z()};
+// The performer's sensors, one per segment; with `site_turn_deg`, each with its standard
+// site's normal turned by that much about the vertical as an explicit site_normal.
+std::vector<SensorConfig> performer_sensors(std::optional<double> site_turn_deg = {}) {
+  std::vector<SensorConfig> out;
   for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
     SensorConfig s;
     s.name = std::string(sim::Performer::sensor_name(i));
     s.segment = s.name;
     s.driver = "direct";
-    cfg.sensors.push_back(s);
+    if (site_turn_deg) {
+      const Eigen::Vector3d n =
+          Eigen::AngleAxisd(*site_turn_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
+          standard_site_normal_body(*segment_from_name(s.segment));
+      s.site_normal = std::array<double, 3>{n.x(), n.y(), n.z()};
+    }
+    out.push_back(s);
   }
-  sim::PerformerParams pp;
-  pp.motion = "walk";
-  pp.loop = false;
-  sim::Performer perf(pp);
-  const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
-  const double capture_at_s = calib_end_s - 0.3 - cfg.calibration.capture_s;
-  ASSERT_GT(capture_at_s, calib_begin_s + 0.5);
+  return out;
+}
 
-  RigEngine engine(cfg);
+// Feeds the performer's samples into `engine` at 100 Hz until end_s, starts the N-pose
+// capture at capture_at_s, and calls after_frame(t_ns) after each frame.
+template <typename AfterFrame>
+void drive(RigEngine& engine, sim::Performer& perf, double end_s, double capture_at_s,
+           AfterFrame after_frame) {
   PoseFrame frame;
   std::vector<ImuSample> samples;
-  std::string npose_text;
   bool capture_started = false;
-  const double end_s = perf.track().period_s();
   for (int k = 1; k * 0.01 <= end_s; ++k) {
     const int64_t t_ns = static_cast<int64_t>(k) * 10'000'000;
     samples.clear();
@@ -82,9 +78,38 @@ TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
       capture_started = true;
     }
     engine.build_frame(t_ns, frame);
+    after_frame(t_ns);
+  }
+}
+
+TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
+  const fs::path file =
+      fs::temp_directory_path() / ("mocap-refined-calib-" + std::to_string(getpid()) + ".toml");
+  fs::remove(file);
+  ConfigErrors errs;
+  std::optional<Config> parsed = parse_config("", "<defaults>", {}, errs);
+  ASSERT_TRUE(parsed) << errs.to_string();
+  Config cfg = *parsed;
+  cfg.calibration.file = file.string();
+  const Eigen::Vector3d axis = sim::pelvis_forward_axis_sensor();
+  cfg.calibration.heading_axis_sensor = {axis.x(), axis.y(), axis.z()};
+  cfg.sensors = performer_sensors();
+  sim::PerformerParams pp;
+  pp.motion = "walk";
+  pp.loop = false;
+  sim::Performer perf(pp);
+  const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
+  const double capture_at_s = calib_end_s - 0.3 - cfg.calibration.capture_s;
+  ASSERT_GT(capture_at_s, calib_begin_s + 0.5);
+
+  RigEngine engine(cfg);
+  PoseFrame frame;
+  std::string npose_text;
+  const double end_s = perf.track().period_s();
+  drive(engine, perf, end_s, capture_at_s, [&](int64_t) {
     engine.flush_calibration_file();  // written by a thread: wait for it before looking
     if (npose_text.empty() && fs::exists(file)) npose_text = read_text(file);
-  }
+  });
   ASSERT_FALSE(npose_text.empty()) << engine.last_calibration_message();
   // The walk identified the knees: the calibration in use differs from the N-pose one ...
   EXPECT_GE(engine.skeleton().hinge_refiner().valid_hinges(), 2);
@@ -106,26 +131,6 @@ TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
   fs::remove(file);
 }
 
-// The performer's sensors, one per segment; with `site_turn_deg`, each with its standard
-// site's normal turned by that much about the vertical as an explicit site_normal.
-std::vector<SensorConfig> performer_sensors(std::optional<double> site_turn_deg = {}) {
-  std::vector<SensorConfig> out;
-  for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
-    SensorConfig s;
-    s.name = std::string(sim::Performer::sensor_name(i));
-    s.segment = s.name;
-    s.driver = "direct";
-    if (site_turn_deg) {
-      const Eigen::Vector3d n =
-          Eigen::AngleAxisd(*site_turn_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
-          standard_site_normal_body(*segment_from_name(s.segment));
-      s.site_normal = std::array<double, 3>{n.x(), n.y(), n.z()};
-    }
-    out.push_back(s);
-  }
-  return out;
-}
-
 // The N-pose calibration of the performer's stand through the real RigEngine.
 Calibration npose_calibration(const Config& cfg) {
   sim::PerformerParams pp;
@@ -135,21 +140,7 @@ Calibration npose_calibration(const Config& cfg) {
   const double calib_end_s = perf.calibration_window_s().second;
   const double capture_at_s = calib_end_s - 0.3 - cfg.calibration.capture_s;
   RigEngine engine(cfg);
-  PoseFrame frame;
-  std::vector<ImuSample> samples;
-  bool capture_started = false;
-  for (int k = 1; k * 0.01 <= calib_end_s; ++k) {
-    const int64_t t_ns = static_cast<int64_t>(k) * 10'000'000;
-    samples.clear();
-    perf.step_to(t_ns, samples);
-    for (const ImuSample& s : samples)
-      engine.on_sample(s.sensor_id, s);
-    if (!capture_started && k * 0.01 >= capture_at_s) {
-      engine.calibrate(CalibrationPose::npose);
-      capture_started = true;
-    }
-    engine.build_frame(t_ns, frame);
-  }
+  drive(engine, perf, calib_end_s, capture_at_s, [](int64_t) {});
   return engine.skeleton().calibration();
 }
 
