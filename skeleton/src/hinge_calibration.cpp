@@ -144,7 +144,6 @@ void HingeAxisRefiner::add(const std::array<Eigen::Quaterniond, kSegmentCount>& 
     // The parent's rotation about axes other than the hinge axis (y) while the hinge flexes:
     // what pins the parent's yaw.
     if (rel > 2 * min_rate) s.parent_travel_rad += std::hypot(wp.x(), wp.z()) * dt_w_s_[c];
-    ++s.n_added;
   }
 }
 
@@ -281,19 +280,23 @@ HingeAxisRefiner::YawFit HingeAxisRefiner::fit(const Eigen::Matrix4d& h, const E
         mm.diagonal().array() += lambda * diag_scale;
         const Eigen::LDLT<Eigen::Matrix2d> ldlt(mm);
         const Eigen::Vector2d step = -ldlt.solve(grad);
+        const auto damp_more = [&] { lambda = lambda == 0 ? 1e-6 : lambda * 8; };
         // Not positive definite (a saddle, or indefinite away from the minimum): damp more.
-        const bool usable = ldlt.info() == Eigen::Success && ldlt.isPositive() &&
-                            step.allFinite() && step.squaredNorm() > 0;
-        const double np = std::clamp(m.yaw_p + (usable ? step.x() : 0.0), -range, range);
-        const double nc = std::clamp(m.yaw_c + (usable ? step.y() : 0.0), -range, range);
-        const double c = usable ? cost(np, nc) : m.cost;
-        if (usable && c < m.cost) {
+        if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !step.allFinite() ||
+            step.squaredNorm() == 0) {
+          damp_more();
+          continue;
+        }
+        const double np = std::clamp(m.yaw_p + step.x(), -range, range);
+        const double nc = std::clamp(m.yaw_c + step.y(), -range, range);
+        const double c = cost(np, nc);
+        if (c < m.cost) {
           improved = true;
           converged = std::abs(np - m.yaw_p) + std::abs(nc - m.yaw_c) < 1e-10;
           m = {np, nc, c};
           lambda *= 0.25;
         } else {
-          lambda = lambda == 0 ? 1e-6 : lambda * 8;
+          damp_more();
         }
       }
       if (!improved || converged) break;

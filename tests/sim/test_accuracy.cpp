@@ -147,22 +147,10 @@ TEST(Accuracy, BasinHysteresisMakesTheArmRaiseIndependentOfTheHeadingSource) {
   EXPECT_NEAR(three_dof[0], three_dof[1], 0.4);
 }
 
-TEST(Accuracy, TurnAfterCalibrationMoves) {
-  // The knees' and elbows' yaw offsets found as the exact minimum of the hinge fit (not the
-  // nearest node of a 0.05 deg grid window, which snapped to points degrees apart along the
-  // cost's narrow valley): seed 1's turn after the moves went 2.51 -> 1.72 deg.
-  AccuracyOptions o;
-  o.motion = "turn";
-  o.seed = 1;
-  o.calibration_moves = true;
-  const AccuracyResult r = run_accuracy(o);
-  ASSERT_TRUE(r.calibrated) << r.calibration_message;
-  record(r);
-  EXPECT_EQ(r.hinges_identified, 4);
-  EXPECT_LE(r.hinge_max_rmse_deg, 2.0);  // target, met (measured 1.72)
-}
-
-TEST(Accuracy, TurnKeepsTheKneeYawsTheMovesIdentified) {
+TEST(Accuracy, TurnAfterCalibrationMovesKeepsTheKneeYaws) {
+  // Seed 1: the knees' and elbows' yaw offsets found as the exact minimum of the hinge fit (not
+  // the nearest node of a 0.05 deg grid window, which snapped to points degrees apart along the
+  // cost's narrow valley): the turn after the moves went 2.51 -> 1.72 deg (now 1.55).
   // Seed 4: the calibration moves identify both knees' mounting yaws within 0.9 deg; the turn
   // on the spot that follows (60 deg/s about the vertical with steps) has rates inconsistent
   // with a rigid hinge by ~50x the moves' (hard-iron heading corrections, gyro scale errors,
@@ -171,17 +159,20 @@ TEST(Accuracy, TurnKeepsTheKneeYawsTheMovesIdentified) {
   // block weighted by its own residual level: <= 0.63 deg, knee 2.58 deg; the rest is the two
   // filters' heading drifting apart by ~3 deg during the turn, which the heading coupling
   // follows with its 1 s time constant (3 s: 2.58; docs/accuracy.md): knee 1.94 deg.
-  AccuracyOptions o;
-  o.motion = "turn";
-  o.seed = 4;
-  o.calibration_moves = true;
-  const AccuracyResult r = run_accuracy(o);
-  ASSERT_TRUE(r.calibrated) << r.calibration_message;
-  record(r);
-  EXPECT_EQ(r.hinges_identified, 4);
-  for (Segment s : {Segment::thigh_l, Segment::shank_l, Segment::thigh_r, Segment::shank_r})
-    EXPECT_LT(std::abs(r.mount_yaw_error_deg[index(s)]), 1.0) << name(s);
-  EXPECT_LE(r.joint_rmse_deg[index(Segment::shank_l)], 2.0);  // target, met (1.94)
+  for (uint64_t seed : {1, 4}) {
+    AccuracyOptions o;
+    o.motion = "turn";
+    o.seed = seed;
+    o.calibration_moves = true;
+    const AccuracyResult r = run_accuracy(o);
+    ASSERT_TRUE(r.calibrated) << r.calibration_message;
+    record(r);
+    EXPECT_EQ(r.hinges_identified, 4) << seed;
+    for (Segment s : {Segment::thigh_l, Segment::shank_l, Segment::thigh_r, Segment::shank_r})
+      EXPECT_LT(std::abs(r.mount_yaw_error_deg[index(s)]), 1.0) << name(s) << " seed " << seed;
+    // Target, met: measured 1.55 (seed 1), 1.94 (seed 4, the left knee).
+    EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << seed;
+  }
 }
 
 TEST(Accuracy, ArmRaiseThroughNinetyDegreesWithRealisticSensors) {

@@ -44,8 +44,9 @@ TEST(AccuracyProcedure, EveryMotionAfterTheCalibrationMovesMeetsTheTargets) {
       const double three_dof_max = miss ? miss->three_dof_guard_deg : 3.0;
       EXPECT_LE(r.hinge_max_rmse_deg, hinge_max) << motion << " seed " << seed;
       EXPECT_LE(r.three_dof_max_rmse_deg, three_dof_max) << motion << " seed " << seed;
-      if (r.distance_walked_m >= 1.0)
+      if (r.distance_walked_m >= 1.0) {
         EXPECT_LE(r.root_drift_fraction, 0.05) << motion << " seed " << seed;
+      }
       EXPECT_EQ(r.hinges_identified, 4) << motion << " seed " << seed;
       met += r.hinge_max_rmse_deg <= 2.0 && r.three_dof_max_rmse_deg <= 3.0 &&
              (r.distance_walked_m < 1.0 || r.root_drift_fraction <= 0.05);

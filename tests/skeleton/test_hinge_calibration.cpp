@@ -281,8 +281,9 @@ TEST(HingeCalibration, EstimateIsContinuousInTheBaseHeading) {
     ASSERT_TRUE(est[0][h].valid && est[1][h].valid) << h;
     EXPECT_NEAR(est[1][h].applied_child_yaw_deg - est[0][h].applied_child_yaw_deg, -0.01, 0.003)
         << h;
-    if (est[0][h].parent_valid)
+    if (est[0][h].parent_valid) {
       EXPECT_NEAR(est[1][h].parent_yaw_deg - est[0][h].parent_yaw_deg, -0.01, 0.003) << h;
+    }
   }
 }
 

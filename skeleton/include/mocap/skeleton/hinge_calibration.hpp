@@ -185,7 +185,6 @@ class HingeAxisRefiner {
   struct Sums : Quad {
     double travel_rad = 0;
     double parent_travel_rad = 0;  ///< the parent's own rotation over the same samples
-    int n_added = 0;               ///< samples added (folded into the fit or in the open block)
   };
   /// Folds pair h's open block into its sums with the block's noise weight (noise_weighting) or
   /// weight 1, and empties it.
