@@ -28,7 +28,7 @@ class DemoService final : public Service {
     sim::PerformerParams p;
     p.seed = cfg.demo.seed;
     p.rate_hz = cfg.demo.rate_hz;
-    p.height_m = cfg.body.height_m;
+    p.height_m = cfg.body.model.height_m;
     p.motion = cfg.demo.motion;
     p.loop = true;
     params_ = p;

@@ -59,12 +59,6 @@ CalibratorOptions calibrator_options(const Config& cfg) {
   return o;
 }
 
-BodyModel body_model(const Config& cfg) {
-  BodyModelConfig b;
-  b.height_m = cfg.body.height_m;
-  return BodyModel(b);
-}
-
 }  // namespace
 
 FilterParams filter_params(const FilterConfig& f) {
@@ -81,7 +75,8 @@ RigEngine::RigEngine(const Config& cfg, Logger* log)
     : cfg_(cfg),
       log_(log),
       consensus_(cfg.sensors.size()),
-      skeleton_(body_model(cfg), default_joint_limits(), rig_mapping(cfg), skeleton_options(cfg)),
+      skeleton_(BodyModel(cfg.body.model), cfg.body.limits, rig_mapping(cfg),
+                skeleton_options(cfg)),
       calibrator_(rig_mapping(cfg), calibrator_options(cfg)) {
   const FilterParams fp = filter_params(cfg.filter);
   filters_.assign(cfg.sensors.size(), AttitudeFilter(fp));

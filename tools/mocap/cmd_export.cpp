@@ -79,17 +79,18 @@ int export_csv(SessionReader& r, const std::string& in, const std::string& out) 
 
 /// Body height from the configuration recorded in the session (the one the poses were
 /// computed with); the default height, with a warning, if it does not parse.
-double recorded_height_m(const SessionReader& r, const std::string& in) {
+/// The body model of the recorded configuration (height and segment offsets).
+BodyModelConfig recorded_body(const SessionReader& r, const std::string& in) {
   daemon::ConfigErrors errors;
   const auto cfg =
       daemon::parse_config(r.header().config_text, in + " (recorded config)", {}, errors);
-  if (cfg) return cfg->body.height_m;
-  const double fallback = daemon::BodyConfig{}.height_m;
+  if (cfg) return cfg->body.model;
+  const BodyModelConfig fallback;
   std::fprintf(stderr,
                "mocap export: warning: the recorded configuration does not parse (%s); using "
                "body height %.2f m\n",
                errors.errors.empty() ? "empty" : errors.errors.front().to_string().c_str(),
-               fallback);
+               fallback.height_m);
   return fallback;
 }
 
@@ -113,7 +114,7 @@ int export_bvh(SessionReader& r, const std::string& in, const std::string& out) 
   if (frames > 1 && t_last > t_first)
     opt.frame_time_s =
         static_cast<double>(t_last - t_first) * 1e-9 / static_cast<double>(frames - 1);
-  const double height_m = recorded_height_m(r, in);
+  const BodyModelConfig body = recorded_body(r, in);
   SessionReader again;
   std::string error;
   if (!again.open(in, &error)) {
@@ -121,7 +122,7 @@ int export_bvh(SessionReader& r, const std::string& in, const std::string& out) 
     return 1;
   }
   try {
-    BvhWriter writer(out, BodyModel(body_dimensions_from_height(height_m)), opt);
+    BvhWriter writer(out, BodyModel(body), opt);
     while (again.next(b))
       if (b.type == session::BlockType::pose) writer.write_frame(b.pose);
     writer.close();
@@ -130,7 +131,7 @@ int export_bvh(SessionReader& r, const std::string& in, const std::string& out) 
     return 1;
   }
   std::fprintf(stderr, "mocap export: %ld frames (%.3f s each, body height %.2f m) -> %s\n", frames,
-               opt.frame_time_s, height_m, out.c_str());
+               opt.frame_time_s, body.height_m, out.c_str());
   return 0;
 }
 

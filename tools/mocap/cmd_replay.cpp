@@ -28,11 +28,9 @@ using namespace mocap::daemon;
 class BvhSink final : public FrameSink {
  public:
   BvhSink(const std::string& path, const Config& cfg) {
-    BodyModelConfig b;
-    b.height_m = cfg.body.height_m;
     BvhWriterOptions o;
     o.frame_time_s = 1.0 / cfg.pipeline.rate_hz;
-    writer_ = std::make_unique<BvhWriter>(path, BodyModel(b), o);
+    writer_ = std::make_unique<BvhWriter>(path, BodyModel(cfg.body.model), o);
   }
   void publish(const PoseFrame& f) override { writer_->write_frame(f); }
   void close() { writer_->close(); }
