@@ -3,10 +3,12 @@
 // Angle conventions (segment frames x forward, y left, z up): flexion of hip and shoulder lifts the
 // limb forward = rotation about y by -angle; knee flexion = +angle about y; elbow flexion = -angle
 // about y; left-arm abduction = +angle about x, right-arm abduction = -angle about x.
+#include <cctype>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 
+#include "calibration_procedure.hpp"
 #include "mocap/core/units.hpp"
 #include "mocap/sim/motion.hpp"
 #include "smoothstep.hpp"
@@ -226,6 +228,20 @@ class ClipSequence final : public Motion {
   double duration_s_ = 0;
 };
 
+std::vector<Clip> calibration_procedure_clips() {
+  return {{Clip::kStand, 3.0},
+          {Clip::kCalibrationMoves, calibration_moves_s() - 1.0},
+          {Clip::kStand, 1.0}};
+}
+
+bool is_bvh_path(std::string_view name) {
+  if (name.size() < 4) return false;
+  std::string ext(name.substr(name.size() - 4));
+  for (char& ch : ext)
+    ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return ext == ".bvh";
+}
+
 constexpr std::string_view kNames[] = {"npose",     "walk",  "turn",    "squat",
                                        "arm_raise", "reach", "sequence"};
 
@@ -246,12 +262,18 @@ std::unique_ptr<Motion> make_motion(std::string_view name) {
   };
   const Clip calib{Clip::kStand, 3.0}, rest{Clip::kStand, 1.0};
   constexpr std::string_view kPrefix = "calibrate+";
-  if (name.starts_with(kPrefix)) {
+  const bool calibrate = name.starts_with(kPrefix);
+  if (calibrate) {
     name.remove_prefix(kPrefix.size());
     if (name.starts_with(kPrefix) || name == "npose")
       throw std::invalid_argument("calibrate+ needs a moving motion after it, not '" +
                                   std::string(name) + "'");
-    clips = {calib, {Clip::kCalibrationMoves, calibration_moves_s() - 1.0}, rest};
+    clips = calibration_procedure_clips();
+  }
+  if (is_bvh_path(name)) {
+    // The file's own lead-in stand is the calibration stand unless the procedure comes first.
+    return calibrate ? make_bvh_motion(std::string(name), 0.0, 1.0, make_calibration_procedure())
+                     : make_bvh_motion(std::string(name));
   }
   if (name == "npose") {
     append({{Clip::kStand, 5.0}});
@@ -280,9 +302,14 @@ std::unique_ptr<Motion> make_motion(std::string_view name) {
     for (auto n : kNames)
       valid += (valid.empty() ? "" : ", ") + std::string(n);
     throw std::invalid_argument("unknown motion '" + std::string(name) + "' (valid: " + valid +
-                                ", each optionally prefixed by calibrate+)");
+                                " or a BVH file path ending in .bvh, each optionally prefixed by "
+                                "calibrate+)");
   }
   return std::make_unique<ClipSequence>(std::move(clips));
+}
+
+std::unique_ptr<Motion> make_calibration_procedure() {
+  return std::make_unique<ClipSequence>(calibration_procedure_clips());
 }
 
 double calibration_moves_s() {

@@ -1,8 +1,6 @@
 // Body model config: TOML parsing of the editable form and the build of the runtime form.
 #include <toml++/toml.h>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
 
 #include "mocap/skeleton/body_model.hpp"
@@ -69,11 +67,7 @@ BodyModelConfig parse_body_config(std::string_view text, std::string_view source
 }
 
 BodyModelConfig load_body_config(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open body config");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_body_config(ss.str(), path);
+  return parse_body_config(skeleton_toml::read_file(path, "body config"), path);
 }
 
 BodyModel::BodyModel(const BodyModelConfig& cfg)

@@ -1,7 +1,6 @@
 // Joint limits from TOML: overrides on top of the anatomical defaults.
 #include <toml++/toml.h>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -87,11 +86,7 @@ JointLimits parse_joint_limits(std::string_view text, std::string_view source) {
 }
 
 JointLimits load_joint_limits(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open joint limits file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_joint_limits(ss.str(), path);
+  return parse_joint_limits(skeleton_toml::read_file(path, "joint limits file"), path);
 }
 
 }  // namespace mocap

@@ -1,6 +1,9 @@
 // Checked TOML parsing with positioned errors for the skeleton's readers.
 #include "toml_io.hpp"
 
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "mocap/core/text_check.hpp"
@@ -24,6 +27,19 @@ namespace mocap::skeleton_toml {
 void fail(std::string_view source, const toml::source_region& r, const std::string& what) {
   throw TomlPositionError(std::string(source), static_cast<int>(r.begin.line),
                           static_cast<int>(r.begin.column), what);
+}
+
+std::string read_file(const std::string& path, std::string_view what) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw std::runtime_error(path + ": cannot open " + std::string(what) + " (not a regular file)");
+  if (std::filesystem::file_size(path, ec) > (1u << 20))
+    throw std::runtime_error(path + ": " + std::string(what) + " too large (over 1 MiB)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open " + std::string(what));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
 }
 
 toml::table parse(std::string_view text, std::string_view source) {

@@ -380,4 +380,11 @@ TEST(Config, BodyErrorsNameTheirFileAndLine) {
             std::string::npos)
       << errs.to_string();
   EXPECT_NE(errs.to_string().find("rig.toml:3"), std::string::npos) << errs.to_string();
+  // A device or a directory is refused, not read forever.
+  errs = {};
+  EXPECT_FALSE(parse("[body]\nmodel = \"/dev/zero\"\njoint_limits = \"/tmp\"\n", errs));
+  ASSERT_EQ(errs.errors.size(), 2u) << errs.to_string();
+  EXPECT_NE(errs.to_string().find("/dev/zero: cannot open body config (not a regular file)"),
+            std::string::npos)
+      << errs.to_string();
 }

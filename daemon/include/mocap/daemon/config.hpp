@@ -128,8 +128,9 @@ struct DemoConfig {
   std::string path = "device";         ///< "device" (simulated devices via ptys) or "direct"
   std::string protocol = "witmotion";  ///< wire protocol the simulated devices speak
   double rate_hz = 100.0;
-  /// A virtual-performer motion (sim::motion_names(), optionally "calibrate+"): by default the
-  /// calibration procedure (N-pose, knee bends with elbow curls) before the sequence.
+  /// A virtual-performer motion (sim::motion_names() or a BVH file, optionally "calibrate+"):
+  /// by default the calibration procedure (N-pose, knee bends with elbow curls) before the
+  /// sequence.
   std::string motion = "calibrate+sequence";
   uint64_t seed = 1;
 };
