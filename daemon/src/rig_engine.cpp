@@ -158,6 +158,25 @@ void RigEngine::save_calibration_file(int64_t t_ns) {
   if (saver_ && c.valid) saver_->offer(c);
 }
 
+CalibrationProgress RigEngine::calibration_progress() const {
+  CalibrationProgress p;
+  const size_t n = std::min(calib_message_.size(), p.message.size() - 1);
+  std::copy_n(calib_message_.begin(), n, p.message.begin());
+  const HingeAxisRefiner& r = skeleton_.hinge_refiner();
+  p.refining = cfg_.calibration.refine_hinges && skeleton_.calibration().valid;
+  p.needed_travel_deg = static_cast<float>(r.options().min_travel_deg);
+  static_assert(std::tuple_size_v<decltype(p.mountings)> == kRefinePairs.size());
+  for (size_t h = 0; h < kRefinePairs.size(); ++h) {
+    const HingeEstimate& e = r.hinges()[h];
+    CalibrationProgress::Mounting& m = p.mountings[h];
+    m.segment = static_cast<int8_t>(index(kRefinePairs[h].child));
+    m.identified = e.valid;
+    m.travel_deg = static_cast<float>(e.travel_deg);
+    m.yaw_deg = static_cast<float>(e.applied_child_yaw_deg);
+  }
+  return p;
+}
+
 SensorFilterState RigEngine::sensor_state(int i) const {
   SensorFilterState st;
   const AttitudeFilter& f = filters_[i];

@@ -113,6 +113,17 @@ TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
   ASSERT_FALSE(npose_text.empty()) << engine.last_calibration_message();
   // The walk identified the knees: the calibration in use differs from the N-pose one ...
   EXPECT_GE(engine.skeleton().hinge_refiner().valid_hinges(), 2);
+  // The status reports it: the capture's outcome and each knee's mounting identified.
+  const CalibrationProgress progress = engine.calibration_progress();
+  EXPECT_EQ(std::string(progress.message.data()).rfind("calibrated in npose", 0), 0u)
+      << progress.message.data();
+  EXPECT_TRUE(progress.refining);
+  EXPECT_EQ(progress.needed_travel_deg, 150.0f);
+  for (const auto& m : progress.mountings) {
+    if (m.segment != index(Segment::shank_l) && m.segment != index(Segment::shank_r)) continue;
+    EXPECT_TRUE(m.identified) << kSegmentNames[m.segment];
+    EXPECT_GT(m.travel_deg, 150.0f);
+  }
   const Calibration npose = parse_calibration(npose_text);
   const Calibration& in_use = engine.skeleton().calibration();
   EXPECT_GT(max_quat_diff(npose, in_use), 1e-3);
