@@ -198,7 +198,9 @@ void clip_pose(const Clip& c, double t, BodyPose& p) {
 /// Clips played one after another; the heading accumulates over turns.
 class ClipSequence final : public Motion {
  public:
-  explicit ClipSequence(std::vector<Clip> clips) : clips_(std::move(clips)) {
+  /// calib_clip: index of the N-pose calibration stand (a kStand clip), or -1 for none.
+  explicit ClipSequence(std::vector<Clip> clips, int calib_clip = 0)
+      : clips_(std::move(clips)), calib_clip_(calib_clip) {
     double t = 0, yaw = 0;
     for (const Clip& c : clips_) {
       start_s_.push_back(t);
@@ -210,7 +212,8 @@ class ClipSequence final : public Motion {
   }
   double duration_s() const override { return duration_s_; }
   std::pair<double, double> calibration_window_s() const override {
-    return {0.0, clips_.front().kind == Clip::kStand ? clips_.front().duration_s : 0.0};
+    if (calib_clip_ < 0 || clips_[calib_clip_].kind != Clip::kStand) return {0.0, 0.0};
+    return {start_s_[calib_clip_], start_s_[calib_clip_] + clips_[calib_clip_].duration_s};
   }
   void pose(double t_s, BodyPose& out) const override {
     t_s = std::clamp(t_s, 0.0, duration_s_);
@@ -224,6 +227,7 @@ class ClipSequence final : public Motion {
 
  private:
   std::vector<Clip> clips_;
+  int calib_clip_;
   std::vector<double> start_s_, yaw_before_deg_;
   double duration_s_ = 0;
 };
@@ -261,16 +265,30 @@ std::unique_ptr<Motion> make_motion(std::string_view name) {
       clips.push_back(more[i]);
   };
   const Clip calib{Clip::kStand, 3.0}, rest{Clip::kStand, 1.0};
+  // "warmup+": the sensors have been on for a while before the calibration (the person put
+  // them on and walked in: walk, turn, walk back, turn, stand), so the filters have seen motion.
+  constexpr std::string_view kWarmup = "warmup+";
+  std::vector<Clip> warmup;
+  if (name.starts_with(kWarmup)) {
+    name.remove_prefix(kWarmup.size());
+    warmup = {rest,
+              {Clip::kWalk, 6.6},
+              {Clip::kTurn, 3.6, 180},
+              {Clip::kWalk, 6.6},
+              {Clip::kTurn, 3.6, 180},
+              rest};
+  }
   constexpr std::string_view kPrefix = "calibrate+";
   const bool calibrate = name.starts_with(kPrefix);
   if (calibrate) {
     name.remove_prefix(kPrefix.size());
-    if (name.starts_with(kPrefix) || name == "npose")
+    if (name.starts_with(kPrefix) || name.starts_with(kWarmup) || name == "npose")
       throw std::invalid_argument("calibrate+ needs a moving motion after it, not '" +
                                   std::string(name) + "'");
     clips = calibration_procedure_clips();
   }
   if (is_bvh_path(name)) {
+    if (!warmup.empty()) throw std::invalid_argument("warmup+ is for the built-in motions");
     // The file's own lead-in stand is the calibration stand unless the procedure comes first.
     return calibrate ? make_bvh_motion(std::string(name), 0.0, 1.0, make_calibration_procedure())
                      : make_bvh_motion(std::string(name));
@@ -305,7 +323,9 @@ std::unique_ptr<Motion> make_motion(std::string_view name) {
                                 " or a BVH file path ending in .bvh, each optionally prefixed by "
                                 "calibrate+)");
   }
-  return std::make_unique<ClipSequence>(std::move(clips));
+  const int calib_clip = static_cast<int>(warmup.size());
+  clips.insert(clips.begin(), warmup.begin(), warmup.end());
+  return std::make_unique<ClipSequence>(std::move(clips), calib_clip);
 }
 
 std::unique_ptr<Motion> make_calibration_procedure() {

@@ -78,6 +78,34 @@ TEST(Motion, CalibrationMovesPrecedeTheMotion) {
   EXPECT_THROW(make_motion("calibrate+moonwalk"), std::invalid_argument);
 }
 
+// "warmup+": the sensors run through a walk there and back before the calibration stand, which
+// (and everything after it) is the motion without the prefix, shifted.
+TEST(Motion, WarmupWalksBeforeTheCalibrationStand) {
+  const auto plain = make_motion("calibrate+squat");
+  const auto warm = make_motion("warmup+calibrate+squat");
+  const double shift_s = warm->duration_s() - plain->duration_s();
+  EXPECT_NEAR(shift_s, 22.4, 1e-9);
+  EXPECT_NEAR(warm->calibration_window_s().first, shift_s, 1e-9);
+  EXPECT_NEAR(warm->calibration_window_s().second, shift_s + 3.0, 1e-9);
+  double max_knee_deg = 0;
+  BodyPose p, a, b;
+  for (double t = 0; t < shift_s; t += 0.05) {
+    warm->pose(t, p);
+    max_knee_deg = std::max(max_knee_deg, angle_deg(p.q_parent_segment[index(Segment::shank_l)],
+                                                    Eigen::Quaterniond::Identity()));
+  }
+  EXPECT_GT(max_knee_deg, 40);  // walking
+  for (double t = 0; t < plain->duration_s(); t += 0.37) {
+    warm->pose(t + shift_s, a);
+    plain->pose(t, b);
+    EXPECT_LT(angle_deg(a.q_earth_pelvis, b.q_earth_pelvis), 1e-6) << t;  // facing as before
+    EXPECT_LT(angle_deg(a.q_parent_segment[index(Segment::shank_l)],
+                        b.q_parent_segment[index(Segment::shank_l)]),
+              1e-9);
+  }
+  EXPECT_THROW(make_motion("calibrate+warmup+squat"), std::invalid_argument);
+}
+
 // Lowest contact point (heel below the ankle, or toe = foot end point) of a foot.
 // With `point` >= 0 the same point (0 heel, 1 toe) is returned, else the lower one.
 Eigen::Vector3d contact(const BodyDimensions& d, const TruthFrame& f, Segment foot,
