@@ -1,6 +1,8 @@
 // Ground-truth forward kinematics (independent of the skeleton solver under test).
 #include "mocap/sim/body_pose.hpp"
 
+#include "mocap/skeleton/quat_math.hpp"
+
 namespace mocap::sim {
 
 void truth_forward_kinematics(const BodyDimensions& dims, const BodyPose& pose, TruthFrame& out) {
@@ -15,6 +17,19 @@ void truth_forward_kinematics(const BodyDimensions& dims, const BodyPose& pose, 
     out.p_earth_segment_m[i] =
         out.p_earth_segment_m[parent] + out.q_earth_segment[parent] * dims.joint_offset_m[i];
   }
+}
+
+PoseFrame to_pose_frame(const TruthFrame& t) {
+  PoseFrame f;
+  reset_pose(f);
+  for (int s = 0; s < kSegmentCount; ++s) {
+    f.q_earth_segment[s] = to_wxyz(t.q_earth_segment[s]);
+    f.q_parent_segment[s] = to_wxyz(t.q_parent_segment[s]);
+    const Eigen::Vector3d& p = t.p_earth_segment_m[s];
+    f.p_earth_segment_m[s] = {static_cast<float>(p.x()), static_cast<float>(p.y()),
+                              static_cast<float>(p.z())};
+  }
+  return f;
 }
 
 }  // namespace mocap::sim

@@ -11,17 +11,6 @@
 namespace mocap::sim {
 namespace {
 
-void to_frame(const TruthFrame& t, PoseFrame& f) {
-  for (int s = 0; s < kSegmentCount; ++s) {
-    const auto& q = t.q_earth_segment[s];
-    const auto& j = t.q_parent_segment[s];
-    f.q_earth_segment[s] = {float(q.w()), float(q.x()), float(q.y()), float(q.z())};
-    f.q_parent_segment[s] = {float(j.w()), float(j.x()), float(j.y()), float(j.z())};
-    const auto& p = t.p_earth_segment_m[s];
-    f.p_earth_segment_m[s] = {float(p.x()), float(p.y()), float(p.z())};
-  }
-}
-
 std::string temp_bvh(const char* stem) {
   return (std::filesystem::temp_directory_path() /
           (std::string(stem) + std::to_string(getpid()) + ".bvh"))
@@ -31,12 +20,10 @@ std::string temp_bvh(const char* stem) {
 /// Writes 8 s of `original` from 4 s on (the walk itself) as a 60 Hz BVH file.
 void write_bvh(const std::string& path, const Performer& original) {
   BvhWriter w(path, BodyModel(original.dims()), {1.0 / 60, 100.0});
-  PoseFrame f;
   TruthFrame t;
   for (int k = 0; k * (1.0 / 60) <= 8.0; ++k) {
     original.truth_at(4.0 + k / 60.0, t);
-    to_frame(t, f);
-    w.write_frame(f);
+    w.write_frame(to_pose_frame(t));
   }
 }
 

@@ -26,19 +26,6 @@ constexpr const char* kPerformUsage =
     "                     [--samples OUT.csv] [--truth OUT.csv] [--bvh OUT.bvh [--bvh-rate HZ]]\n"
     "  At least one output. The motion plays once (default: its whole length).\n";
 
-PoseFrame to_pose_frame(const sim::TruthFrame& t) {
-  PoseFrame f;
-  for (int s = 0; s < kSegmentCount; ++s) {
-    const auto& q = t.q_earth_segment[s];
-    const auto& j = t.q_parent_segment[s];
-    const auto& p = t.p_earth_segment_m[s];
-    f.q_earth_segment[s] = {float(q.w()), float(q.x()), float(q.y()), float(q.z())};
-    f.q_parent_segment[s] = {float(j.w()), float(j.x()), float(j.y()), float(j.z())};
-    f.p_earth_segment_m[s] = {float(p.x()), float(p.y()), float(p.z())};
-  }
-  return f;
-}
-
 }  // namespace
 
 int run_perform(int argc, char** argv) {
@@ -115,7 +102,7 @@ int run_perform(int argc, char** argv) {
     long n_samples = 0, n_truth = 0;
     for (long k = 0; k * bvh_period_s <= end_s + 1e-9 && bvh; ++k) {
       perf.truth_at(k * bvh_period_s, t);
-      bvh->write_frame(to_pose_frame(t));
+      bvh->write_frame(sim::to_pose_frame(t));
     }
     for (long k = 0; k * truth_period_s <= end_s + 1e-9; ++k) {
       const double t_s = k * truth_period_s;

@@ -12,6 +12,7 @@
 
 #include "mocap/core/segments.hpp"
 #include "mocap/skeleton/body_model.hpp"
+#include "mocap/skeleton/pose_frame.hpp"
 
 namespace mocap::sim {
 
@@ -35,5 +36,9 @@ struct TruthFrame {
 /// Forward kinematics of the ground truth: fills q_earth_segment, p_earth_segment_m and
 /// q_parent_segment of `out` (t_s untouched).
 void truth_forward_kinematics(const BodyDimensions& dims, const BodyPose& pose, TruthFrame& out);
+
+/// The truth as a PoseFrame (segment orientations, joint positions and rotations; every other
+/// field default), e.g. for a BVH file of the ground truth.
+PoseFrame to_pose_frame(const TruthFrame& truth);
 
 }  // namespace mocap::sim
