@@ -214,7 +214,7 @@ std::string Daemon::status_json() const {
     nlohmann::json mounts = nlohmann::json::array();
     int identified = 0;
     for (const auto& m : c.mountings) {
-      if (m.segment < 0) continue;
+      if (m.segment < 0 || !m.tracked) continue;
       identified += m.identified;
       mounts.push_back({{"segment", std::string(kSegmentNames[m.segment])},
                         {"joint", std::string(kJointNames[m.segment])},

@@ -169,7 +169,11 @@ CalibrationProgress RigEngine::calibration_progress() const {
   for (size_t h = 0; h < kRefinePairs.size(); ++h) {
     const HingeEstimate& e = r.hinges()[h];
     CalibrationProgress::Mounting& m = p.mountings[h];
-    m.segment = static_cast<int8_t>(index(kRefinePairs[h].child));
+    const RefinePair& pr = kRefinePairs[h];
+    m.segment = static_cast<int8_t>(index(pr.child));
+    m.tracked = skeleton_.rig().tracked(index(pr.parent)) &&
+                skeleton_.rig().tracked(index(pr.child)) &&
+                (pr.via < 0 || skeleton_.rig().tracked(pr.via));
     m.identified = e.valid;
     m.travel_deg = static_cast<float>(e.travel_deg);
     m.yaw_deg = static_cast<float>(e.applied_child_yaw_deg);

@@ -6,7 +6,9 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -24,6 +26,46 @@ std::string default_control_socket_path() {
 // Request lines of the daemon's control protocol (mocap/daemon/control.hpp).
 std::string calibrate_request(const std::string& pose) {
   return "calibrate " + pose;
+}
+
+std::string status_request() {
+  return "status";
+}
+
+std::string calibration_prompt(const std::string& status_reply_json) {
+  const auto j = nlohmann::json::parse(status_reply_json, nullptr, false);
+  if (j.is_discarded() || !j.is_object() || !j.contains("calibration")) return "";
+  const auto& c = j["calibration"];
+  if (!c.is_object()) return "";
+  const auto upper = [](std::string s) {
+    for (char& ch : s)
+      ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    return s;
+  };
+  const std::string message = c.value("message", std::string());
+  if (!j.value("calibrated", false)) return message.empty() ? "" : "CALIBRATION: " + upper(message);
+  if (!c.value("refining", false)) return "";
+  std::string todo;
+  bool knees = false, arms = false;
+  for (const auto& m : c.value("mountings", nlohmann::json::array())) {
+    if (!m.is_object() || m.value("identified", false)) continue;
+    const std::string seg = m.value("segment", std::string());
+    (seg.rfind("shank", 0) == 0 ? knees : arms) = true;
+    char part[96];
+    std::snprintf(part, sizeof part, "  %s %.0f/%.0f DEG", upper(seg).c_str(),
+                  m.value("travel_deg", 0.0), c.value("needed_travel_deg", 0.0));
+    todo += part;
+  }
+  if (todo.empty()) return "";
+  std::string what = knees && arms ? "BEND THE KNEES, CURL THE ELBOWS"
+                     : knees       ? "BEND THE KNEES"
+                                   : "CURL THE ELBOWS";
+  return "CALIBRATION MOVES: " + what + todo;
+}
+
+std::string fetch_calibration_prompt(const std::string& socket_path) {
+  const ControlReply r = send_control_request(socket_path, status_request(), 100);
+  return r.ok ? calibration_prompt(r.json) : std::string();
 }
 
 std::string heading_reset_request() {
@@ -81,6 +123,7 @@ ControlReply send_control_request(const std::string& path, const std::string& re
   const auto j = nlohmann::json::parse(reply, nullptr, false);
   if (j.is_discarded() || !j.is_object()) return {false, "daemon reply is not JSON: " + reply};
   ControlReply r;
+  r.json = reply;
   r.ok = j.value("ok", false);
   if (j.contains("error") && j["error"].is_string())
     r.message = j["error"].get<std::string>();

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "mocap/viewer/control_client.hpp"
 #include "mocap/viewer/gl_util.hpp"
 #include "mocap/viewer/offscreen.hpp"
 #include "viewer_options.hpp"
@@ -32,6 +33,10 @@ int run_screenshot(const ViewerOptions& o) {
       while (!source->poll(wall_s(), view.frames) && wall_s() < o.wait_s)
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
+    // A live daemon's calibration prompt, as the window shows it.
+    if (live)
+      view.hud.calibration_prompt = fetch_calibration_prompt(
+          o.control_socket.empty() ? default_control_socket_path() : o.control_socket);
     bool any_pose = !view.frames.empty();
     for (int i = 0; i < o.frames; ++i) {
       source->poll(live ? wall_s() : static_cast<double>(i) / 60.0, view.frames);

@@ -127,11 +127,14 @@ void build_hud(TextRenderer& t, const HudInfo& hud, const ViewSettings& settings
                     hud.calibration_pose.empty() ? "" : " ", hud.calibration_pose.c_str(),
                     static_cast<double>(f->calib_countdown_s));
       prompt = line;
+    } else if (!hud.calibration_prompt.empty() && !(f->flags & kFrameReplay)) {
+      prompt = hud.calibration_prompt.c_str();  // the moves still to do, or a refusal
     } else if (!(f->flags & (kFrameCalibrated | kFrameReplay | kFrameDemo))) {
       prompt = "NOT CALIBRATED: PRESS N (N-POSE) OR T (T-POSE)";
     }
     if (prompt) {
-      const int scale = 3;
+      const int scale =
+          TextRenderer::text_width(prompt, 3) + 24 > static_cast<float>(width) ? 2 : 3;
       panel_text(t, 0.5f * (static_cast<float>(width) - TextRenderer::text_width(prompt, scale)),
                  0.22f * static_cast<float>(height), scale, prompt, kYellow);
     }

@@ -140,10 +140,16 @@ int run_window(const ViewerOptions& o) {
     using clock = std::chrono::steady_clock;
     const auto start = clock::now();
     auto fps_window_start = start;
+    auto status_asked = start - std::chrono::seconds(1);
     int fps_frames = 0;
     while (!glfwWindowShouldClose(window)) {
       glfwPollEvents();
       const auto now = clock::now();
+      if (!source->seekable() && now - status_asked >= std::chrono::seconds(1)) {
+        // A live daemon: what its calibration still needs (the moves, or a refusal's reason).
+        status_asked = now;
+        view.hud.calibration_prompt = fetch_calibration_prompt(app.control_socket);
+      }
       source->poll(std::chrono::duration<double>(now - start).count(), view.frames);
       view.hud.source = source->status();
       if (++fps_frames, now - fps_window_start > std::chrono::milliseconds(500)) {

@@ -22,6 +22,7 @@ using CalibrationPose = mocap::CalibrationPose;
 struct CalibrationProgress {
   struct Mounting {
     int8_t segment = -1;      ///< the segment whose mounting yaw the motion identifies
+    bool tracked = false;     ///< the rig has sensors on the segments this needs
     bool identified = false;  ///< enough flexion seen and the fit well-conditioned
     float travel_deg = 0;     ///< flexion travel seen so far
     float yaw_deg = 0;        ///< the identified correction of its mounting yaw

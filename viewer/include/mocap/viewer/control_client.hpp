@@ -15,10 +15,23 @@ std::string default_control_socket_path();
 std::string calibrate_request(const std::string& pose);  ///< pose: "npose" or "tpose"
 std::string heading_reset_request();
 
+std::string status_request();
+
 struct ControlReply {
   bool ok = false;
   std::string message;  ///< the daemon's message or error, or why it could not be reached
+  std::string json;     ///< the reply line itself ("" if none came)
 };
+
+/// What the HUD prompts after a calibration, from a `status` reply: the calibration's refusal
+/// reason while uncalibrated after a capture, or, while the calibration moves still have
+/// mountings to identify, what to do and how far each is ("CALIBRATION MOVES: BEND THE KNEES,
+/// CURL THE ELBOWS  KNEE_L 112/150 DEG ..."); "" when there is nothing to say. Upper case (the
+/// HUD's font). Never throws.
+std::string calibration_prompt(const std::string& status_reply_json);
+/// Asks the daemon for its status (100 ms at most) and returns calibration_prompt() of it; ""
+/// when no daemon answers.
+std::string fetch_calibration_prompt(const std::string& socket_path);
 
 /// Connects, sends `request` plus '\n', waits up to `timeout_ms` for one reply line. A reply is
 /// ok if it is a JSON object with "ok": true. Never throws.

@@ -26,8 +26,9 @@ struct HudInfo {
   double fps = 0;
   std::string source;
   bool paused = false;
-  std::string calibration_pose;  ///< last requested ("N-POSE", "T-POSE")
-  std::string message;           ///< last control reply or error
+  std::string calibration_pose;    ///< last requested ("N-POSE", "T-POSE")
+  std::string message;             ///< last control reply or error
+  std::string calibration_prompt;  ///< from the daemon's status (calibration_prompt())
 };
 
 class View {
