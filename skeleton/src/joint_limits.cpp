@@ -54,8 +54,11 @@ JointLimits default_joint_limits() {
   j[index(Segment::torso)] = ball(2, 0, 1, -35, 35, -30, 90, -45, 45);
   j[index(Segment::neck)] = ball(2, 0, 1, -30, 30, -30, 45, -50, 50);
   j[index(Segment::head)] = ball(2, 0, 1, -30, 30, -30, 50, -45, 45);
-  // Shoulder: abduction to 180, adduction 30; flexion 180, extension 60; rotation +-90.
-  j[index(Segment::upper_arm_l)] = ball(2, 0, 1, -30, 180, -180, 60, -90, 90);
+  // Shoulder: abduction to 180, adduction 45; flexion 180, extension 60; rotation +-90. The
+  // ellipse's adduction half-axis is 45, not the 30 of a hanging arm against the trunk: a raised
+  // arm crosses the body much further (a reach across at 70 deg of flexion decomposes to
+  // 32 deg of adduction), and a limit must not flag a normal reach.
+  j[index(Segment::upper_arm_l)] = ball(2, 0, 1, -45, 180, -180, 60, -90, 90);
   // Elbow: hinge about y, flexion 150 (-b), 5 of hyperextension, 10 off-axis (carrying angle),
   // twist = forearm pronation/supination +-90.
   JointLimit elbow = ball(2, 0, 1, -10, 10, -150, 5, -90, 90);

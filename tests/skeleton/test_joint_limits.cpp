@@ -56,7 +56,7 @@ TEST(JointLimits, AnatomicalPosesPassImpossibleOnesViolate) {
   // Shoulder abducted to T-pose: left +90 about x, right -90 about x; the wrong way is adduction.
   EXPECT_EQ(v(Segment::upper_arm_l, rot(0, 90)), 0);
   EXPECT_EQ(v(Segment::upper_arm_r, rot(0, -90)), 0);
-  EXPECT_NEAR(v(Segment::upper_arm_l, rot(0, -90)), 60, 1e-9);
+  EXPECT_NEAR(v(Segment::upper_arm_l, rot(0, -90)), 45, 1e-9);  // adduction limit 45
   // Head turned 120 deg: twist beyond 45.
   EXPECT_NEAR(v(Segment::head, rot(2, 120)), 75, 1e-9);
   // Twist and swing combined: swing inside, twist out.
