@@ -1,9 +1,10 @@
 // Root motion: moves the pelvis across the floor by keeping the stance foot's contact point
 // fixed on the ground (floor at z = 0), or pins it. Each foot has two contact points, heel
 // (below the ankle) and toe (the foot's end point); the stance foot is the lower foot with
-// hysteresis, and its lower contact point is the anchor. Switching anchor re-anchors at the new
-// point's current position, so the root never jumps. Vertical: the lowest contact point rests on
-// the floor.
+// hysteresis, or the other foot as soon as the stance foot's heel or toe lifts off (toe-off
+// timing: a real swing foot points toe-down and its toe leaves the floor moving forward), and
+// its lower contact point is the anchor. Switching anchor re-anchors at the new point's current
+// position, so the root never jumps. Vertical: the lowest contact point rests on the floor.
 #pragma once
 
 #include <Eigen/Geometry>
