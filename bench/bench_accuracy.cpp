@@ -200,6 +200,8 @@ int run_accuracy(int argc, char** argv) {
       .flag(
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
+      .flag("warmup",
+            "the sensors run for 22 s of walking and turning before the calibration stand")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
       .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
       .option("anchor",
@@ -286,6 +288,7 @@ int run_accuracy(int argc, char** argv) {
   h.block_min_samples = static_cast<int>(block_min_samples);
   if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");
+  base.warmup = args.has("warmup");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();
   if (args.has("sensor-errors")) {
     std::string bad;

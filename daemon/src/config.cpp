@@ -16,6 +16,7 @@
 
 #include "mocap/core/segments.hpp"
 #include "mocap/core/thread_priority.hpp"
+#include "mocap/skeleton/config_tables.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
 namespace mocap::daemon {
@@ -355,6 +356,67 @@ bool valid_ipv4(const std::string& s) {
   return inet_pton(AF_INET, s.c_str(), &a) == 1;
 }
 
+/// [body]: the model file, then height_m and [body.segment.*]; the joint-limits file, then
+/// [body.joint.*]. Errors inside the included files name their own file:line and the key that
+/// included them.
+void read_body(TableReader& b, BodyConfig& body, Ctx& ctx) {
+  const auto add_table_error = [&ctx](const TomlPositionError& e, const std::string& key,
+                                      const std::string& via) {
+    ConfigError err;
+    err.file = e.source;
+    err.line = e.line;
+    err.column = e.column;
+    err.key = key;
+    err.message = e.problem + via;
+    ctx.errors.errors.push_back(std::move(err));
+  };
+  const auto source_of = [&ctx](const toml::node& n) {
+    const auto& p = n.source().path;
+    return p && !p->empty() ? std::string(*p) : ctx.source;
+  };
+  std::string model_file, limits_file;
+  b.str("model", model_file);
+  b.str("joint_limits", limits_file);
+  const auto included = [&](const char* key) {
+    const toml::node* n = b.node(key);
+    return " (included by " + source_of(*n) + ":" + std::to_string(n->source().begin.line) +
+           " body." + key + ")";
+  };
+  if (!model_file.empty()) {
+    try {
+      body.model = load_body_config(model_file);
+    } catch (const TomlPositionError& e) {
+      add_table_error(e, "", included("model"));
+    } catch (const std::exception& e) {
+      ctx.add(b.node("model"), "body.model", e.what());
+    }
+  }
+  if (!limits_file.empty()) {
+    try {
+      body.limits = load_joint_limits(limits_file);
+    } catch (const TomlPositionError& e) {
+      add_table_error(e, "", included("joint_limits"));
+    } catch (const std::exception& e) {
+      ctx.add(b.node("joint_limits"), "body.joint_limits", e.what());
+    }
+  }
+  b.num("height_m", body.model.height_m, kMinBodyHeightM, kMaxBodyHeightM);
+  if (const toml::node* n = b.node("segment")) {
+    try {
+      read_body_segments(*n, source_of(*n), body.model);
+    } catch (const TomlPositionError& e) {
+      add_table_error(e, "body.segment", "");
+    }
+  }
+  if (const toml::node* n = b.node("joint")) {
+    try {
+      read_joint_limit_tables(*n, source_of(*n), body.limits);
+    } catch (const TomlPositionError& e) {
+      add_table_error(e, "body.joint", "");
+    }
+  }
+}
+
 Config read_root(const toml::table& root, Ctx& ctx) {
   Config c;
   TableReader r(&root, &root, "", ctx);
@@ -405,7 +467,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
   }
   {
     TableReader b(r.table("body"), &root, "body", ctx);
-    b.num("height_m", c.body.height_m, 0.5, 2.5);
+    read_body(b, c.body, ctx);
     b.boolean("enforce_limits", c.body.enforce_limits);
     b.boolean("root_motion", c.body.root_motion);
     b.finish();
@@ -634,6 +696,47 @@ std::optional<Config> load_config(const std::string& path,
   return parse_config(ss.str(), path, overrides, errors, validators);
 }
 
+namespace {
+
+toml::array toml_vec3(const Eigen::Vector3d& v) {
+  return toml::array{v.x(), v.y(), v.z()};
+}
+
+/// [body] with every override inlined (no file keys), so a recorded configuration is complete.
+toml::table body_to_toml(const BodyConfig& b) {
+  toml::table t{{"height_m", b.model.height_m},
+                {"enforce_limits", b.enforce_limits},
+                {"root_motion", b.root_motion}};
+  toml::table segments;
+  for (int i = 0; i < kSegmentCount; ++i) {
+    toml::table st;
+    if (b.model.joint_offset_m[i])
+      st.insert("joint_offset_m", toml_vec3(*b.model.joint_offset_m[i]));
+    if (b.model.end_offset_m[i]) st.insert("end_offset_m", toml_vec3(*b.model.end_offset_m[i]));
+    if (!st.empty()) segments.insert(std::string(kSegmentNames[i]), std::move(st));
+  }
+  if (!segments.empty()) t.insert("segment", std::move(segments));
+  const JointLimits defaults = default_joint_limits();
+  toml::table joints;
+  for (int i = 1; i < kSegmentCount; ++i) {
+    const JointLimit &l = b.limits.joint[i], &d = defaults.joint[i];
+    if (l.limited == d.limited && l.hinge == d.hinge && l.a_min_deg == d.a_min_deg &&
+        l.a_max_deg == d.a_max_deg && l.b_min_deg == d.b_min_deg && l.b_max_deg == d.b_max_deg &&
+        l.twist_min_deg == d.twist_min_deg && l.twist_max_deg == d.twist_max_deg)
+      continue;
+    joints.insert(std::string(kJointNames[i]),
+                  toml::table{{"limited", l.limited},
+                              {"hinge", l.hinge},
+                              {"a_deg", toml::array{l.a_min_deg, l.a_max_deg}},
+                              {"b_deg", toml::array{l.b_min_deg, l.b_max_deg}},
+                              {"twist_deg", toml::array{l.twist_min_deg, l.twist_max_deg}}});
+  }
+  if (!joints.empty()) t.insert("joint", std::move(joints));
+  return t;
+}
+
+}  // namespace
+
 std::string config_to_toml(const Config& c) {
   toml::table root;
   root.insert("daemon", toml::table{{"log_level", c.daemon.log_level},
@@ -655,9 +758,7 @@ std::string config_to_toml(const Config& c) {
     }
     root.insert("filter", std::move(f));
   }
-  root.insert("body", toml::table{{"height_m", c.body.height_m},
-                                  {"enforce_limits", c.body.enforce_limits},
-                                  {"root_motion", c.body.root_motion}});
+  root.insert("body", body_to_toml(c.body));
   root.insert("calibration", toml::table{{"pose", c.calibration.pose},
                                          {"countdown_s", c.calibration.countdown_s},
                                          {"capture_s", c.calibration.capture_s},

@@ -28,11 +28,20 @@ class DemoService final : public Service {
     sim::PerformerParams p;
     p.seed = cfg.demo.seed;
     p.rate_hz = cfg.demo.rate_hz;
-    p.height_m = cfg.body.height_m;
+    p.height_m = cfg.body.model.height_m;
     p.motion = cfg.demo.motion;
     p.loop = true;
     params_ = p;
     performer_ = std::make_unique<sim::Performer>(p);  // validates the motion name
+    if (performer_->track().motion().dimensions()) {
+      // A BVH file's bones: the avatar gets the performer's segment lengths.
+      const BodyDimensions& d = performer_->dims();
+      cfg.body.model.height_m = d.height_m;
+      for (int s = 0; s < kSegmentCount; ++s) {
+        cfg.body.model.joint_offset_m[s] = d.joint_offset_m[s];
+        cfg.body.model.end_offset_m[s] = d.end_offset_m[s];
+      }
+    }
     cfg.sensors.clear();
     for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
       SensorConfig s;

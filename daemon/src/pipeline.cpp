@@ -195,6 +195,7 @@ void Pipeline::snapshot() {
   status_.frame = core_.last_frame();
   for (size_t i = 0; i < core_.sensors().size(); ++i)
     status_.filter[i] = core_.filter_state(static_cast<int>(i));
+  status_.calibration = core_.calibration_progress();
   status_.samples = core_.samples_processed();
   status_.rejected = core_.rejected_samples();
   status_.ring_drops = ring_drops();

@@ -59,12 +59,6 @@ CalibratorOptions calibrator_options(const Config& cfg) {
   return o;
 }
 
-BodyModel body_model(const Config& cfg) {
-  BodyModelConfig b;
-  b.height_m = cfg.body.height_m;
-  return BodyModel(b);
-}
-
 }  // namespace
 
 FilterParams filter_params(const FilterConfig& f) {
@@ -81,7 +75,8 @@ RigEngine::RigEngine(const Config& cfg, Logger* log)
     : cfg_(cfg),
       log_(log),
       consensus_(cfg.sensors.size()),
-      skeleton_(body_model(cfg), default_joint_limits(), rig_mapping(cfg), skeleton_options(cfg)),
+      skeleton_(BodyModel(cfg.body.model), cfg.body.limits, rig_mapping(cfg),
+                skeleton_options(cfg)),
       calibrator_(rig_mapping(cfg), calibrator_options(cfg)) {
   const FilterParams fp = filter_params(cfg.filter);
   filters_.assign(cfg.sensors.size(), AttitudeFilter(fp));
@@ -161,6 +156,25 @@ void RigEngine::save_calibration_file(int64_t t_ns) {
   saved_t_ns_ = t_ns;
   const Calibration& c = skeleton_.calibration();
   if (saver_ && c.valid) saver_->offer(c);
+}
+
+CalibrationProgress RigEngine::calibration_progress() const {
+  CalibrationProgress p;
+  const size_t n = std::min(calib_message_.size(), p.message.size() - 1);
+  std::copy_n(calib_message_.begin(), n, p.message.begin());
+  const HingeAxisRefiner& r = skeleton_.hinge_refiner();
+  p.refining = cfg_.calibration.refine_hinges && skeleton_.calibration().valid;
+  p.needed_travel_deg = static_cast<float>(r.options().min_travel_deg);
+  static_assert(std::tuple_size_v<decltype(p.mountings)> == kRefinePairs.size());
+  for (size_t h = 0; h < kRefinePairs.size(); ++h) {
+    const HingeEstimate& e = r.hinges()[h];
+    CalibrationProgress::Mounting& m = p.mountings[h];
+    m.segment = static_cast<int8_t>(index(kRefinePairs[h].child));
+    m.identified = e.valid;
+    m.travel_deg = static_cast<float>(e.travel_deg);
+    m.yaw_deg = static_cast<float>(e.applied_child_yaw_deg);
+  }
+  return p;
 }
 
 SensorFilterState RigEngine::sensor_state(int i) const {

@@ -46,7 +46,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   pp.seed = o.seed;
   pp.rate_hz = o.rate_hz;
   pp.height_m = o.height_m;
-  pp.motion = o.calibration_moves ? "calibrate+" + o.motion : o.motion;
+  pp.motion =
+      (o.warmup ? "warmup+" : "") + (o.calibration_moves ? "calibrate+" + o.motion : o.motion);
   pp.loop = false;
   pp.sensor = o.sensor;
   pp.field.dipoles = disturbance_preset(o.disturbance, o.height_m);
@@ -89,7 +90,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   calibrator.start(CalibrationPose::npose, to_ns(capture_start_s));
 
   const double frame_s = 1.0 / o.rate_hz;
-  const double eval_start_s = o.calibration_moves ? calib_end_s + calibration_moves_s() : 0.0;
+  const double eval_start_s =
+      o.calibration_moves ? calib_end_s + calibration_moves_s() : calib_begin_s;
   const double end_s = perf.track().period_s();
   std::vector<ImuSample> samples;
   samples.reserve(4 * Performer::kSensorCount);

@@ -3,10 +3,12 @@
 // Angle conventions (segment frames x forward, y left, z up): flexion of hip and shoulder lifts the
 // limb forward = rotation about y by -angle; knee flexion = +angle about y; elbow flexion = -angle
 // about y; left-arm abduction = +angle about x, right-arm abduction = -angle about x.
+#include <cctype>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 
+#include "calibration_procedure.hpp"
 #include "mocap/core/units.hpp"
 #include "mocap/sim/motion.hpp"
 #include "smoothstep.hpp"
@@ -203,7 +205,9 @@ void clip_pose(const Clip& c, double t, BodyPose& p) {
 /// Clips played one after another; the heading accumulates over turns.
 class ClipSequence final : public Motion {
  public:
-  explicit ClipSequence(std::vector<Clip> clips) : clips_(std::move(clips)) {
+  /// calib_clip: index of the N-pose calibration stand (a kStand clip), or -1 for none.
+  explicit ClipSequence(std::vector<Clip> clips, int calib_clip = 0)
+      : clips_(std::move(clips)), calib_clip_(calib_clip) {
     double t = 0, yaw = 0;
     for (const Clip& c : clips_) {
       start_s_.push_back(t);
@@ -215,7 +219,8 @@ class ClipSequence final : public Motion {
   }
   double duration_s() const override { return duration_s_; }
   std::pair<double, double> calibration_window_s() const override {
-    return {0.0, clips_.front().kind == Clip::kStand ? clips_.front().duration_s : 0.0};
+    if (calib_clip_ < 0 || clips_[calib_clip_].kind != Clip::kStand) return {0.0, 0.0};
+    return {start_s_[calib_clip_], start_s_[calib_clip_] + clips_[calib_clip_].duration_s};
   }
   void pose(double t_s, BodyPose& out) const override {
     t_s = std::clamp(t_s, 0.0, duration_s_);
@@ -229,9 +234,24 @@ class ClipSequence final : public Motion {
 
  private:
   std::vector<Clip> clips_;
+  int calib_clip_;
   std::vector<double> start_s_, yaw_before_deg_;
   double duration_s_ = 0;
 };
+
+std::vector<Clip> calibration_procedure_clips() {
+  return {{Clip::kStand, 3.0},
+          {Clip::kCalibrationMoves, calibration_moves_s() - 1.0},
+          {Clip::kStand, 1.0}};
+}
+
+bool is_bvh_path(std::string_view name) {
+  if (name.size() < 4) return false;
+  std::string ext(name.substr(name.size() - 4));
+  for (char& ch : ext)
+    ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return ext == ".bvh";
+}
 
 constexpr std::string_view kNames[] = {"npose",     "walk",  "turn",    "squat",
                                        "arm_raise", "reach", "sequence"};
@@ -252,13 +272,33 @@ std::unique_ptr<Motion> make_motion(std::string_view name) {
       clips.push_back(more[i]);
   };
   const Clip calib{Clip::kStand, 3.0}, rest{Clip::kStand, 1.0};
+  // "warmup+": the sensors have been on for a while before the calibration (the person put
+  // them on and walked in: walk, turn, walk back, turn, stand), so the filters have seen motion.
+  constexpr std::string_view kWarmup = "warmup+";
+  std::vector<Clip> warmup;
+  if (name.starts_with(kWarmup)) {
+    name.remove_prefix(kWarmup.size());
+    warmup = {rest,
+              {Clip::kWalk, 6.6},
+              {Clip::kTurn, 3.6, 180},
+              {Clip::kWalk, 6.6},
+              {Clip::kTurn, 3.6, 180},
+              rest};
+  }
   constexpr std::string_view kPrefix = "calibrate+";
-  if (name.starts_with(kPrefix)) {
+  const bool calibrate = name.starts_with(kPrefix);
+  if (calibrate) {
     name.remove_prefix(kPrefix.size());
-    if (name.starts_with(kPrefix) || name == "npose")
+    if (name.starts_with(kPrefix) || name.starts_with(kWarmup) || name == "npose")
       throw std::invalid_argument("calibrate+ needs a moving motion after it, not '" +
                                   std::string(name) + "'");
-    clips = {calib, {Clip::kCalibrationMoves, calibration_moves_s() - 1.0}, rest};
+    clips = calibration_procedure_clips();
+  }
+  if (is_bvh_path(name)) {
+    if (!warmup.empty()) throw std::invalid_argument("warmup+ is for the built-in motions");
+    // The file's own lead-in stand is the calibration stand unless the procedure comes first.
+    return calibrate ? make_bvh_motion(std::string(name), 0.0, 1.0, make_calibration_procedure())
+                     : make_bvh_motion(std::string(name));
   }
   if (name == "npose") {
     append({{Clip::kStand, 5.0}});
@@ -287,9 +327,16 @@ std::unique_ptr<Motion> make_motion(std::string_view name) {
     for (auto n : kNames)
       valid += (valid.empty() ? "" : ", ") + std::string(n);
     throw std::invalid_argument("unknown motion '" + std::string(name) + "' (valid: " + valid +
-                                ", each optionally prefixed by calibrate+)");
+                                " or a BVH file path ending in .bvh, each optionally prefixed by "
+                                "calibrate+)");
   }
-  return std::make_unique<ClipSequence>(std::move(clips));
+  const int calib_clip = static_cast<int>(warmup.size());
+  clips.insert(clips.begin(), warmup.begin(), warmup.end());
+  return std::make_unique<ClipSequence>(std::move(clips), calib_clip);
+}
+
+std::unique_ptr<Motion> make_calibration_procedure() {
+  return std::make_unique<ClipSequence>(calibration_procedure_clips());
 }
 
 double calibration_moves_s() {

@@ -1,11 +1,10 @@
 // Body model config: TOML parsing of the editable form and the build of the runtime form.
 #include <toml++/toml.h>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
 
 #include "mocap/skeleton/body_model.hpp"
+#include "mocap/skeleton/config_tables.hpp"
 
 #include "toml_io.hpp"
 
@@ -34,6 +33,20 @@ Eigen::Vector3d read_vec3(std::string_view source, const toml::node& n, std::str
 
 }  // namespace
 
+void read_body_segments(const toml::node& segment, std::string_view source, BodyModelConfig& cfg) {
+  skeleton_toml::for_each_segment_table(
+      source, segment, [&](int i, const std::string& path, const toml::table& st) {
+        for (auto&& [fk, fv] : st) {
+          if (fk == "joint_offset_m")
+            cfg.joint_offset_m[i] = read_vec3(source, fv, fk.str(), 2.0);
+          else if (fk == "end_offset_m")
+            cfg.end_offset_m[i] = read_vec3(source, fv, fk.str(), 2.0);
+          else
+            fail(source, fk.source(), "unknown key '" + std::string(fk.str()) + "' in " + path);
+        }
+      });
+}
+
 BodyModelConfig parse_body_config(std::string_view text, std::string_view source) {
   const toml::table tbl = skeleton_toml::parse(text, source);
   BodyModelConfig cfg;
@@ -41,21 +54,11 @@ BodyModelConfig parse_body_config(std::string_view text, std::string_view source
     if (k == "height_m") {
       std::optional<double> h = v.value<double>();
       if (!h || !v.is_number()) fail(source, v.source(), "height_m must be a number");
-      if (!std::isfinite(*h) || *h < 0.5 || *h > 2.6)
+      if (!std::isfinite(*h) || *h < kMinBodyHeightM || *h > kMaxBodyHeightM)
         fail(source, v.source(), "height_m out of range (0.5 .. 2.6 m)");
       cfg.height_m = *h;
     } else if (k == "segment") {
-      skeleton_toml::for_each_segment_table(
-          source, v, [&](int i, const std::string& path, const toml::table& st) {
-            for (auto&& [fk, fv] : st) {
-              if (fk == "joint_offset_m")
-                cfg.joint_offset_m[i] = read_vec3(source, fv, fk.str(), 2.0);
-              else if (fk == "end_offset_m")
-                cfg.end_offset_m[i] = read_vec3(source, fv, fk.str(), 2.0);
-              else
-                fail(source, fk.source(), "unknown key '" + std::string(fk.str()) + "' in " + path);
-            }
-          });
+      read_body_segments(v, source, cfg);
     } else {
       fail(source, k.source(), "unknown key '" + std::string(k.str()) + "'");
     }
@@ -64,11 +67,7 @@ BodyModelConfig parse_body_config(std::string_view text, std::string_view source
 }
 
 BodyModelConfig load_body_config(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open body config");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_body_config(ss.str(), path);
+  return parse_body_config(skeleton_toml::read_file(path, "body config"), path);
 }
 
 BodyModel::BodyModel(const BodyModelConfig& cfg)

@@ -168,11 +168,7 @@ void save_calibration(const Calibration& c, const std::string& path) {
 }
 
 Calibration load_calibration(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open calibration");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_calibration(ss.str(), path);
+  return parse_calibration(skeleton_toml::read_file(path, "calibration"), path);
 }
 
 }  // namespace mocap

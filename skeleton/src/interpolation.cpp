@@ -65,6 +65,10 @@ OrientationTrack::Sample OrientationTrack::sample(int64_t t_ns) const {
     else
       hi = mid;
   }
+  if (t_at(lo) == t_ns) {  // a key itself: measured, not bridged
+    s.q = q_at(lo);
+    return s;
+  }
   const int64_t gap = t_at(hi) - t_at(lo);
   if (gap > max_bridge_ns_) {
     s.q = q_at(lo);

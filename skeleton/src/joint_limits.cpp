@@ -70,8 +70,10 @@ JointLimits default_joint_limits() {
   knee.hinge = true;
   j[index(Segment::shank_l)] = knee;
   // Ankle: the foot's bone points forward (x): twist = inversion/eversion +-25, b = plantar (+)
-  // / dorsal (-) flexion 50/20, a = toe-out about z +-25.
-  j[index(Segment::foot_l)] = ball(0, 2, 1, -25, 25, -20, 50, -25, 25);
+  // / dorsal (-) flexion 50/35, a = toe-out about z +-25. Dorsiflexion 35, not the 20 of the
+  // open-chain range: with the body's weight on it (a squat, a lunge, knee bends with the heels
+  // down) the ankle reaches 35-40 deg, and a limit must not flag or clamp a normal squat.
+  j[index(Segment::foot_l)] = ball(0, 2, 1, -25, 25, -35, 50, -25, 25);
   j[index(Segment::upper_arm_r)] = mirror_limit(j[index(Segment::upper_arm_l)]);
   j[index(Segment::forearm_r)] = mirror_limit(j[index(Segment::forearm_l)]);
   j[index(Segment::hand_r)] = mirror_limit(j[index(Segment::hand_l)]);

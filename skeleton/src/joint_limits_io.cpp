@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "mocap/skeleton/config_tables.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 
 #include "toml_io.hpp"
@@ -40,40 +41,52 @@ void read_range(std::string_view source, const toml::node& n, std::string_view k
 
 }  // namespace
 
+void read_joint_limit_tables(const toml::node& joint, std::string_view source, JointLimits& L) {
+  const toml::table* joints = joint.as_table();
+  if (!joints) fail(source, joint.source(), "[joint] must be a table of joint tables");
+  for (auto&& [jk, jv] : *joints) {
+    const int i = joint_index(jk.str());
+    if (i <= 0)
+      fail(source, jk.source(), "unknown or unlimitable joint '" + std::string(jk.str()) + "'");
+    const toml::table* jt = jv.as_table();
+    if (!jt) fail(source, jv.source(), "joint." + std::string(jk.str()) + " must be a table");
+    JointLimit& l = L.joint[i];
+    for (auto&& [fk, fv] : *jt) {
+      if (fk == "a_deg")
+        read_range(source, fv, fk.str(), l.a_min_deg, l.a_max_deg);
+      else if (fk == "b_deg")
+        read_range(source, fv, fk.str(), l.b_min_deg, l.b_max_deg);
+      else if (fk == "twist_deg")
+        read_range(source, fv, fk.str(), l.twist_min_deg, l.twist_max_deg);
+      else if (fk == "hinge") {
+        if (!fv.is_boolean()) fail(source, fv.source(), "hinge must be true or false");
+        l.hinge = *fv.value<bool>();
+      } else if (fk == "limited") {
+        if (!fv.is_boolean()) fail(source, fv.source(), "limited must be true or false");
+        l.limited = *fv.value<bool>();
+      } else
+        fail(source, fk.source(), "unknown key '" + std::string(fk.str()) + "'");
+    }
+  }
+  try {
+    validate(L);
+  } catch (const std::invalid_argument& e) {
+    fail(source, joint.source(), e.what());
+  }
+}
+
 JointLimits parse_joint_limits(std::string_view text, std::string_view source) {
   const toml::table tbl = skeleton_toml::parse(text, source);
   JointLimits L = default_joint_limits();
   for (auto&& [k, v] : tbl) {
     if (k != "joint") fail(source, k.source(), "unknown key '" + std::string(k.str()) + "'");
-    const toml::table* joints = v.as_table();
-    if (!joints) fail(source, v.source(), "[joint] must be a table of joint tables");
-    for (auto&& [jk, jv] : *joints) {
-      const int i = joint_index(jk.str());
-      if (i <= 0)
-        fail(source, jk.source(), "unknown or unlimitable joint '" + std::string(jk.str()) + "'");
-      const toml::table* jt = jv.as_table();
-      if (!jt) fail(source, jv.source(), "joint." + std::string(jk.str()) + " must be a table");
-      JointLimit& l = L.joint[i];
-      for (auto&& [fk, fv] : *jt) {
-        if (fk == "a_deg")
-          read_range(source, fv, fk.str(), l.a_min_deg, l.a_max_deg);
-        else if (fk == "b_deg")
-          read_range(source, fv, fk.str(), l.b_min_deg, l.b_max_deg);
-        else if (fk == "twist_deg")
-          read_range(source, fv, fk.str(), l.twist_min_deg, l.twist_max_deg);
-        else if (fk == "hinge") {
-          if (!fv.is_boolean()) fail(source, fv.source(), "hinge must be true or false");
-          l.hinge = *fv.value<bool>();
-        } else if (fk == "limited") {
-          if (!fv.is_boolean()) fail(source, fv.source(), "limited must be true or false");
-          l.limited = *fv.value<bool>();
-        } else
-          fail(source, fk.source(), "unknown key '" + std::string(fk.str()) + "'");
-      }
-    }
+    read_joint_limit_tables(v, source, L);
   }
-  validate(L);
   return L;
+}
+
+JointLimits load_joint_limits(const std::string& path) {
+  return parse_joint_limits(skeleton_toml::read_file(path, "joint limits file"), path);
 }
 
 }  // namespace mocap

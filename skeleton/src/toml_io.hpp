@@ -19,6 +19,10 @@ namespace mocap::skeleton_toml {
 /// position of the first problem.
 toml::table parse(std::string_view text, std::string_view source);
 
+/// Reads a config file of at most 1 MiB; throws std::runtime_error "path: cannot open <what>"
+/// (also for a directory, a device or a FIFO, which would never end) or "path: too large".
+std::string read_file(const std::string& path, std::string_view what);
+
 /// For a `[segment]` node: calls fn(segment index, "segment.NAME", the NAME table) for each
 /// entry; throws for a non-table, an unknown segment name or an entry that is not a table.
 template <typename Fn>

@@ -1,6 +1,7 @@
 // Config loader: defaults, typed reads, file:line:column errors, unknown keys with suggestions,
 // range checks, --set overrides and the --print-config round trip.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -277,4 +278,113 @@ TEST(Config, ValidatorsReportAtTheKey) {
       << all;
   EXPECT_NE(all.find("rig.toml:5:8: sensor[0].driver: unknown driver 'bogus'"), std::string::npos)
       << all;
+}
+
+namespace {
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("mocap-config-test-" + std::to_string(::getpid()) + "-" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+}  // namespace
+
+TEST(Config, BodyModelAndJointLimitsInlineAndFromFiles) {
+  ConfigErrors errs;
+  // Inline: height, a segment override and a joint-limit override.
+  auto c = parse(
+      "[body]\nheight_m = 1.62\n[body.segment.forearm_l]\njoint_offset_m = [0, 0, -0.31]\n"
+      "[body.joint.knee_l]\nb_deg = [-5, 130]\n",
+      errs);
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_DOUBLE_EQ(c->body.model.height_m, 1.62);
+  const int forearm = mocap::index(mocap::Segment::forearm_l);
+  ASSERT_TRUE(c->body.model.joint_offset_m[forearm]);
+  EXPECT_DOUBLE_EQ(c->body.model.joint_offset_m[forearm]->z(), -0.31);
+  const int knee = mocap::index(mocap::Segment::shank_l);
+  EXPECT_DOUBLE_EQ(c->body.limits.joint[knee].b_max_deg, 130);
+  EXPECT_NE(mocap::default_joint_limits().joint[knee].b_max_deg, 130);
+  EXPECT_EQ(c->body.limits.joint[mocap::index(mocap::Segment::shank_r)].b_max_deg,
+            mocap::default_joint_limits().joint[mocap::index(mocap::Segment::shank_r)].b_max_deg);
+  // The printed configuration inlines every override and parses back to the same body.
+  const std::string printed = config_to_toml(*c);
+  auto c2 = parse_config(printed, "printed", {}, errs);
+  ASSERT_TRUE(c2) << errs.to_string() << printed;
+  EXPECT_EQ(c2->body.model.joint_offset_m[forearm], c->body.model.joint_offset_m[forearm]);
+  EXPECT_DOUBLE_EQ(c2->body.limits.joint[knee].b_max_deg, 130);
+  EXPECT_DOUBLE_EQ(c2->body.model.height_m, 1.62);
+
+  // Files (the shipped formats), then inline keys over them.
+  const std::string body = write_file(
+      "body.toml", "height_m = 1.90\n[segment.shank_r]\njoint_offset_m = [0, 0, -0.5]\n");
+  const std::string limits = write_file("limits.toml", "[joint.elbow_r]\nb_deg = [-170, 0]\n");
+  auto f = parse("[body]\nmodel = \"" + body + "\"\njoint_limits = \"" + limits +
+                     "\"\n[body.segment.shank_l]\njoint_offset_m = [0, 0, -0.45]\n",
+                 errs);
+  ASSERT_TRUE(f) << errs.to_string();
+  EXPECT_DOUBLE_EQ(f->body.model.height_m, 1.90);
+  EXPECT_DOUBLE_EQ(f->body.model.joint_offset_m[mocap::index(mocap::Segment::shank_r)]->z(), -0.5);
+  EXPECT_DOUBLE_EQ(f->body.model.joint_offset_m[mocap::index(mocap::Segment::shank_l)]->z(), -0.45);
+  EXPECT_DOUBLE_EQ(f->body.limits.joint[mocap::index(mocap::Segment::forearm_r)].b_min_deg, -170);
+  auto g = parse("[body]\nmodel = \"" + body + "\"\nheight_m = 1.70\n", errs);
+  ASSERT_TRUE(g) << errs.to_string();
+  EXPECT_DOUBLE_EQ(g->body.model.height_m, 1.70);  // the inline height wins
+  // The shipped files are valid.
+  auto shipped = parse("[body]\nmodel = \"" MOCAP_SOURCE_DIR
+                       "/config/body/default.toml\"\n"
+                       "joint_limits = \"" MOCAP_SOURCE_DIR "/config/body/joint_limits.toml\"\n",
+                       errs);
+  EXPECT_TRUE(shipped) << errs.to_string();
+  std::filesystem::remove(body);
+  std::filesystem::remove(limits);
+}
+
+TEST(Config, BodyErrorsNameTheirFileAndLine) {
+  ConfigErrors errs;
+  // Inline: unknown segment at line 3 of the daemon's file.
+  EXPECT_FALSE(parse(
+      "[body]\nheight_m = 1.7\n[body.segment.forarm_l]\njoint_offset_m = [0, 0, -1]\n", errs));
+  ASSERT_EQ(errs.errors.size(), 1u) << errs.to_string();
+  EXPECT_EQ(errs.errors[0].file, "rig.toml");
+  EXPECT_EQ(errs.errors[0].line, 3);
+  EXPECT_NE(errs.to_string().find("unknown segment 'forarm_l'"), std::string::npos)
+      << errs.to_string();
+  // Inline joint limit that excludes the N-pose.
+  errs = {};
+  EXPECT_FALSE(parse("[body.joint.knee_l]\nb_deg = [10, 150]\n", errs));
+  ASSERT_EQ(errs.errors.size(), 1u) << errs.to_string();
+  EXPECT_EQ(errs.errors[0].line, 2);
+  EXPECT_NE(errs.to_string().find("min <= 0 <= max"), std::string::npos) << errs.to_string();
+  // An included file's error names that file's line and the including key.
+  const std::string body =
+      write_file("bad-body.toml", "height_m = 1.8\n\n[segment.head]\nend_offset_m = [0, 0]\n");
+  errs = {};
+  EXPECT_FALSE(parse("[body]\n\nmodel = \"" + body + "\"\n", errs));
+  ASSERT_EQ(errs.errors.size(), 1u) << errs.to_string();
+  EXPECT_EQ(errs.errors[0].file, body);
+  EXPECT_EQ(errs.errors[0].line, 4);
+  EXPECT_NE(errs.to_string().find("end_offset_m must be an array of 3 numbers"), std::string::npos)
+      << errs.to_string();
+  EXPECT_NE(errs.to_string().find("included by rig.toml:3 body.model"), std::string::npos)
+      << errs.to_string();
+  std::filesystem::remove(body);
+  // Missing files and a height out of range.
+  errs = {};
+  EXPECT_FALSE(
+      parse("[body]\njoint_limits = \"/nonexistent/limits.toml\"\nheight_m = 3.5\n", errs));
+  ASSERT_EQ(errs.errors.size(), 2u) << errs.to_string();
+  EXPECT_NE(errs.to_string().find(
+                "rig.toml:2:16: body.joint_limits: /nonexistent/limits.toml: cannot open"),
+            std::string::npos)
+      << errs.to_string();
+  EXPECT_NE(errs.to_string().find("rig.toml:3"), std::string::npos) << errs.to_string();
+  // A device or a directory is refused, not read forever.
+  errs = {};
+  EXPECT_FALSE(parse("[body]\nmodel = \"/dev/zero\"\njoint_limits = \"/tmp\"\n", errs));
+  ASSERT_EQ(errs.errors.size(), 2u) << errs.to_string();
+  EXPECT_NE(errs.to_string().find("/dev/zero: cannot open body config (not a regular file)"),
+            std::string::npos)
+      << errs.to_string();
 }

@@ -60,7 +60,7 @@ std::vector<SensorConfig> performer_sensors(std::optional<double> site_turn_deg 
 }
 
 // Feeds the performer's samples into `engine` at 100 Hz until end_s, starts the N-pose
-// capture at capture_at_s, and calls after_frame(t_ns) after each frame.
+// capture at capture_at_s, and calls after_frame(t_ns, frame) after each frame.
 template <typename AfterFrame>
 void drive(RigEngine& engine, sim::Performer& perf, double end_s, double capture_at_s,
            AfterFrame after_frame) {
@@ -78,7 +78,7 @@ void drive(RigEngine& engine, sim::Performer& perf, double end_s, double capture
       capture_started = true;
     }
     engine.build_frame(t_ns, frame);
-    after_frame(t_ns);
+    after_frame(t_ns, frame);
   }
 }
 
@@ -106,13 +106,24 @@ TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
   PoseFrame frame;
   std::string npose_text;
   const double end_s = perf.track().period_s();
-  drive(engine, perf, end_s, capture_at_s, [&](int64_t) {
+  drive(engine, perf, end_s, capture_at_s, [&](int64_t, const PoseFrame&) {
     engine.flush_calibration_file();  // written by a thread: wait for it before looking
     if (npose_text.empty() && fs::exists(file)) npose_text = read_text(file);
   });
   ASSERT_FALSE(npose_text.empty()) << engine.last_calibration_message();
   // The walk identified the knees: the calibration in use differs from the N-pose one ...
   EXPECT_GE(engine.skeleton().hinge_refiner().valid_hinges(), 2);
+  // The status reports it: the capture's outcome and each knee's mounting identified.
+  const CalibrationProgress progress = engine.calibration_progress();
+  EXPECT_EQ(std::string(progress.message.data()).rfind("calibrated in npose", 0), 0u)
+      << progress.message.data();
+  EXPECT_TRUE(progress.refining);
+  EXPECT_EQ(progress.needed_travel_deg, 150.0f);
+  for (const auto& m : progress.mountings) {
+    if (m.segment != index(Segment::shank_l) && m.segment != index(Segment::shank_r)) continue;
+    EXPECT_TRUE(m.identified) << kSegmentNames[m.segment];
+    EXPECT_GT(m.travel_deg, 150.0f);
+  }
   const Calibration npose = parse_calibration(npose_text);
   const Calibration& in_use = engine.skeleton().calibration();
   EXPECT_GT(max_quat_diff(npose, in_use), 1e-3);
@@ -140,7 +151,7 @@ Calibration npose_calibration(const Config& cfg) {
   const double calib_end_s = perf.calibration_window_s().second;
   const double capture_at_s = calib_end_s - 0.3 - cfg.calibration.capture_s;
   RigEngine engine(cfg);
-  drive(engine, perf, calib_end_s, capture_at_s, [](int64_t) {});
+  drive(engine, perf, calib_end_s, capture_at_s, [](int64_t, const PoseFrame&) {});
   return engine.skeleton().calibration();
 }
 
@@ -172,6 +183,52 @@ TEST(DaemonCalibrationHeading, MountNormalsByDefaultAndSiteNormalsFromTheConfig)
   ASSERT_TRUE(pelvis.valid);
   EXPECT_EQ(pelvis.heading_source, HeadingSource::pelvis_sensor);
   EXPECT_GT(std::abs(pelvis.heading_deg - normals.heading_deg), 0.1);
+}
+
+}  // namespace
+}  // namespace mocap::daemon
+
+namespace mocap::daemon {
+namespace {
+
+// The configured body reaches the pose: a forearm override sets the elbow-to-wrist distance of
+// the streamed positions, and a tightened left-knee limit flags (and clamps) the squat's left
+// knee while the right knee, under the default limit, stays inside it.
+TEST(DaemonBody, ConfiguredSegmentsAndJointLimitsReachThePose) {
+  ConfigErrors errs;
+  std::optional<Config> parsed = parse_config(
+      "[body]\nenforce_limits = false\n[body.segment.hand_l]\njoint_offset_m = [0, 0, -0.40]\n"
+      "[body.joint.knee_l]\nb_deg = [-5, 60]\n",
+      "<test>", {}, errs);
+  ASSERT_TRUE(parsed) << errs.to_string();
+  Config cfg = *parsed;
+  cfg.sensors = performer_sensors();
+  sim::PerformerParams pp;
+  pp.motion = "squat";
+  pp.loop = false;
+  sim::Performer perf(pp);
+  const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
+  RigEngine engine(cfg);
+  int knee_l_flagged = 0, knee_r_flagged = 0, frames = 0;
+  double max_forearm_m = 0;
+  const int shank_l = index(Segment::shank_l), shank_r = index(Segment::shank_r);
+  const int forearm = index(Segment::forearm_l), hand = index(Segment::hand_l);
+  drive(engine, perf, perf.track().period_s(), calib_end_s - 0.3 - cfg.calibration.capture_s,
+        [&](int64_t, const PoseFrame& frame) {
+          if (!(frame.flags & kFrameCalibrated)) return;
+          ++frames;
+          knee_l_flagged += (frame.segment_flags[shank_l] & kSegLimitViolated) != 0;
+          knee_r_flagged += (frame.segment_flags[shank_r] & kSegLimitViolated) != 0;
+          const auto& a = frame.p_earth_segment_m[forearm];
+          const auto& b = frame.p_earth_segment_m[hand];
+          max_forearm_m =
+              std::max<double>(max_forearm_m, std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
+        });
+  ASSERT_GT(frames, 300) << engine.last_calibration_message();
+  EXPECT_NEAR(max_forearm_m, 0.40, 1e-4);
+  EXPECT_GT(knee_l_flagged, 50);  // the squat flexes the knees to 105 deg
+  EXPECT_EQ(knee_r_flagged, 0);
+  EXPECT_DOUBLE_EQ(engine.skeleton().limits().joint[shank_l].b_max_deg, 60);
 }
 
 }  // namespace

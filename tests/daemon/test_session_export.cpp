@@ -128,7 +128,7 @@ TEST(SessionExport, BvhReadsBackThroughTheSkeletonsReaderWithTheRecordedBody) {
   TempDir dir;
   const std::string ses = dir.file("b.mocap"), bvh = dir.file("b.bvh"), err = dir.file("err");
   auto header = make_header();
-  header.config_text = "[body]\nheight_m = 1.62\n";
+  header.config_text = "[body]\nheight_m = 1.62\n[pipeline]\nrate_hz = 100\n";
   std::mt19937 rng(3);
   std::vector<PoseFrame> poses;
   {
@@ -148,7 +148,8 @@ TEST(SessionExport, BvhReadsBackThroughTheSkeletonsReaderWithTheRecordedBody) {
   EXPECT_EQ(text.substr(0, hierarchy.size()), hierarchy);
   const BvhClip clip = parse_bvh(text, bvh);
   ASSERT_EQ(clip.frame_count, 6);
-  EXPECT_NEAR(clip.frame_time_s, 0.010, 1e-9);  // make_pose frames are 10 ms apart
+  EXPECT_NEAR(clip.frame_time_s, 0.010,
+              1e-9);  // the recorded rate; make_pose frames are 10 ms apart
   const BvhMotion motion(clip);
   for (int k = 0; k < 6; ++k) {
     std::array<Eigen::Quaterniond, kSegmentCount> q;
@@ -162,4 +163,53 @@ TEST(SessionExport, BvhReadsBackThroughTheSkeletonsReaderWithTheRecordedBody) {
     const auto& p = poses[k].p_earth_segment_m[0];
     EXPECT_NEAR((root - Eigen::Vector3d(p[0], p[1], p[2])).norm(), 0, 1e-5);
   }
+}
+
+// Export finishes the poses for animation tools: a sensor's 200 ms dropout (its segment held by
+// the live pipeline, the sample age growing) comes out slerped across the gap, and --rate
+// resamples to one fixed frame time.
+TEST(SessionExport, BridgesDropoutsAndResamples) {
+  TempDir dir;
+  const std::string ses = dir.file("d.mocap"), csv = dir.file("d.csv"), err = dir.file("err");
+  constexpr int kNeck = 2;  // driven by make_pose's sensor 2
+  {
+    std::string e;
+    auto w = SessionWriter::create(ses, make_header(), {}, &e);
+    ASSERT_TRUE(w) << e;
+    for (uint64_t i = 0; i < 60; ++i) {
+      PoseFrame f = make_pose(i);
+      if (i >= 20 && i < 40) {  // silent: held at frame 19's orientation
+        f.q_earth_segment[kNeck] = make_pose(19).q_earth_segment[kNeck];
+        f.sensors[kNeck].last_age_ms = 10.0f * static_cast<float>(i - 19);
+      }
+      ASSERT_TRUE(w->append_pose(f));
+    }
+    ASSERT_TRUE(w->close());
+  }
+  ASSERT_EQ(run(ses + " --csv " + csv, err), 0) << read_text(err);
+  EXPECT_NE(read_text(err).find("60 frames (body height 1.75 m; 20 segment-frames bridged"),
+            std::string::npos)
+      << read_text(err);
+  // Row of frame 30's neck: the orientation make_pose gives frame 30 (its angle is linear in
+  // time, so the slerp across the gap reproduces it), not the held one.
+  std::istringstream in(read_text(csv));
+  std::string line;
+  for (int row = 0; row <= 1 + 30 * kSegmentCount + kNeck; ++row)
+    ASSERT_TRUE(std::getline(in, line));
+  std::vector<double> v;
+  std::istringstream ls(line.substr(line.find(",neck,") + 6));
+  for (std::string cell; std::getline(ls, cell, ',');)
+    v.push_back(std::stod(cell));
+  ASSERT_EQ(v.size(), 7u) << line;
+  const auto expect = make_pose(30).q_earth_segment[kNeck];
+  for (int k = 0; k < 4; ++k)
+    EXPECT_NEAR(v[k], expect[k], 2e-6) << line;
+  EXPECT_GT(std::abs(make_pose(19).q_earth_segment[kNeck][2] - expect[2]), 0.01);
+
+  // 60 frames over 590 ms at 50 Hz: 30 frames, 20 ms apart.
+  ASSERT_EQ(run(ses + " --bvh " + dir.file("d.bvh") + " --rate 50", err), 0) << read_text(err);
+  const BvhClip clip = parse_bvh(read_text(dir.file("d.bvh")), "d.bvh");
+  EXPECT_EQ(clip.frame_count, 30);
+  EXPECT_NEAR(clip.frame_time_s, 0.020, 1e-9);
+  EXPECT_EQ(run(ses + " --bvh " + dir.file("d.bvh") + " --rate 0", err), 2);
 }

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +27,7 @@
 
 #include "mocap/daemon/control.hpp"
 #include "mocap/session/session_reader.hpp"
+#include "mocap/skeleton/body_model.hpp"
 
 extern char** environ;
 namespace fs = std::filesystem;
@@ -324,6 +326,14 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
   ASSERT_TRUE(calibrated) << st.dump() << slurp((dir / "mocapd.log.err").string());
   for (const auto& s : st["sensors"])
     EXPECT_TRUE(s["calibrated"].get<bool>()) << s.dump();
+  // The status tells how the calibration went and what the moves still have to identify.
+  EXPECT_EQ(st["calibration"]["message"].get<std::string>().rfind("calibrated in npose", 0), 0u)
+      << st.dump();
+  EXPECT_TRUE(st["calibration"]["refining"].get<bool>()) << st.dump();
+  EXPECT_EQ(st["calibration"]["mountings"].size(), 6u) << st.dump();
+  std::string table;
+  ASSERT_EQ(run({kBin + "mocapctl", "--socket", sock, "status"}, &table), 0);
+  EXPECT_NE(table.find("mountings from motion: shank_l "), std::string::npos) << table;
 
   auto lines = read_lines(port, 60);
   ASSERT_EQ(lines.size(), 60u);
@@ -345,6 +355,61 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
     const double w = q[0], x = q[1], y = q[2], zq = q[3];
     const double up_z = 1 - 2 * (x * x + y * y);
     EXPECT_GT(up_z, std::cos(30 * 3.14159265 / 180)) << q.dump() << " w=" << w << zq;
+  }
+  kill(d, SIGTERM);
+  EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  fs::remove_all(dir);
+}
+
+// Any BVH file as the demo's motion: `mocap perform` writes a 1.60 m performer's walk as BVH,
+// `mocapd --demo` plays it through the calibration procedure and the simulated devices, and the
+// streamed avatar has the file's bones (shank length), not the default 1.75 m body's.
+TEST(Mocapd, DemoPlaysABvhFileWithItsBones) {
+  const fs::path dir = fs::temp_directory_path() / ("mocap-e2e-bvh-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string bvh = (dir / "walk160.bvh").string();
+  std::string out;
+  ASSERT_EQ(
+      run({kBin + "mocap", "perform", "--motion", "walk", "--height", "1.60", "--bvh", bvh}, &out),
+      0)
+      << out;
+  const std::string sock = (dir / "ctl.sock").string();
+  const uint16_t port = free_port();
+  const pid_t d =
+      spawn({kBin + "mocapd", "--demo", "--set", "demo.motion=calibrate+" + bvh, "--set",
+             "daemon.control_socket=" + sock, "--set", "outputs.json.port=" + std::to_string(port),
+             "--set", "outputs.posture.shm_name=/mocap-e2e-bvh-" + std::to_string(getpid()),
+             "--log-level", "info"},
+            (dir / "mocapd.log").string());
+  bool calibrated = false;
+  for (int i = 0; i < 150 && !calibrated; ++i) {
+    std::this_thread::sleep_for(100ms);
+    if (run({kBin + "mocapctl", "--socket", sock, "status", "--json"}, &out) != 0) continue;
+    try {
+      calibrated = nlohmann::json::parse(out)["calibrated"].get<bool>();
+    } catch (const std::exception&) {
+    }
+  }
+  ASSERT_TRUE(calibrated) << out << slurp((dir / "mocapd.log.err").string());
+  const double shank_160_m = mocap::body_dimensions_from_height(1.60)
+                                 .joint_offset_m[mocap::index(mocap::Segment::foot_l)]
+                                 .norm();
+  const double shank_175_m = mocap::body_dimensions_from_height(1.75)
+                                 .joint_offset_m[mocap::index(mocap::Segment::foot_l)]
+                                 .norm();
+  ASSERT_GT(shank_175_m - shank_160_m, 0.03);
+  const auto lines = read_lines(port, 30);
+  ASSERT_EQ(lines.size(), 30u);
+  for (const auto& l : lines) {
+    std::map<std::string, nlohmann::json> seg;
+    for (const auto& s : l["segments"])
+      seg[s["name"].get<std::string>()] = s;
+    const auto& a = seg.at("shank_l")["p"];
+    const auto& b = seg.at("foot_l")["p"];
+    const double shank_m =
+        std::hypot(a[0].get<double>() - b[0].get<double>(), a[1].get<double>() - b[1].get<double>(),
+                   a[2].get<double>() - b[2].get<double>());
+    EXPECT_NEAR(shank_m, shank_160_m, 1e-3) << l.dump();
   }
   kill(d, SIGTERM);
   EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());

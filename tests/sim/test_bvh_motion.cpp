@@ -22,40 +22,55 @@ void to_frame(const TruthFrame& t, PoseFrame& f) {
   }
 }
 
+std::string temp_bvh(const char* stem) {
+  return (std::filesystem::temp_directory_path() /
+          (std::string(stem) + std::to_string(getpid()) + ".bvh"))
+      .string();
+}
+
+/// Writes 8 s of `original` from 4 s on (the walk itself) as a 60 Hz BVH file.
+void write_bvh(const std::string& path, const Performer& original) {
+  BvhWriter w(path, BodyModel(original.dims()), {1.0 / 60, 100.0});
+  PoseFrame f;
+  TruthFrame t;
+  for (int k = 0; k * (1.0 / 60) <= 8.0; ++k) {
+    original.truth_at(4.0 + k / 60.0, t);
+    to_frame(t, f);
+    w.write_frame(f);
+  }
+}
+
+/// Largest segment orientation (deg) and root position (m) difference between a and b over
+/// [from_s, to_s) of a, with b shifted by b_minus_a_s.
+std::pair<double, double> worst_difference(const Performer& a, const Performer& b, double from_s,
+                                           double to_s, double b_minus_a_s) {
+  TruthFrame fa, fb;
+  double worst_deg = 0, worst_m = 0;
+  for (double t = from_s; t < to_s; t += 0.25) {
+    a.truth_at(t, fa);
+    b.truth_at(t + b_minus_a_s, fb);
+    for (int s = 0; s < kSegmentCount; ++s)
+      worst_deg = std::max(
+          worst_deg, fa.q_earth_segment[s].angularDistance(fb.q_earth_segment[s]) * 180 / M_PI);
+    worst_m = std::max(worst_m, (fa.p_earth_segment_m[0] - fb.p_earth_segment_m[0]).norm());
+  }
+  return {worst_deg, worst_m};
+}
+
 TEST(BvhMotion, WalkRoundTripsThroughABvhFile) {
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("mocap_sim_walk_" + std::to_string(getpid()) + ".bvh"))
-                               .string();
+  const std::string path = temp_bvh("mocap_sim_walk_");
   PerformerParams p;
   p.motion = "walk";
   p.loop = false;
   Performer original(p);
-  {
-    BvhWriter w(path, BodyModel(original.dims()), {1.0 / 60, 100.0});
-    PoseFrame f;
-    TruthFrame t;
-    for (int k = 0; k * (1.0 / 60) <= 8.0; ++k) {
-      original.truth_at(4.0 + k / 60.0, t);
-      to_frame(t, f);
-      w.write_frame(f);
-    }
-  }
+  write_bvh(path, original);
   auto motion = std::shared_ptr<const Motion>(make_bvh_motion(path, 3.0, 1.0));
   std::filesystem::remove(path);
   EXPECT_NEAR(motion->duration_s(), 3.0 + 1.0 + 8.0, 1.0 / 60 + 1e-9);
   EXPECT_EQ(motion->calibration_window_s().second, 3.0);
   Performer replay(p, motion);
-  TruthFrame a, b;
-  double worst_deg = 0, worst_m = 0;
-  for (double t = 0.5; t < 7.5; t += 0.25) {
-    original.truth_at(4.0 + t, a);
-    replay.truth_at(4.0 + t, b);  // lead-in 3 s + blend 1 s
-    for (int s = 0; s < kSegmentCount; ++s)
-      worst_deg = std::max(worst_deg,
-                           a.q_earth_segment[s].angularDistance(b.q_earth_segment[s]) * 180 / M_PI);
-    worst_m = std::max(worst_m, (a.p_earth_segment_m[0] - b.p_earth_segment_m[0]).norm());
-  }
-  EXPECT_LT(worst_deg, 1.0);
+  const auto [worst_deg, worst_m] = worst_difference(original, replay, 4.5, 11.5, 0.0);
+  EXPECT_LT(worst_deg, 1.0);  // lead-in 3 s + blend 1 s: the clip from 4 s as in the original
   EXPECT_LT(worst_m, 0.02);
   // The virtual sensors ride on it and the stream stays finite.
   std::vector<ImuSample> out;
@@ -65,8 +80,64 @@ TEST(BvhMotion, WalkRoundTripsThroughABvhFile) {
     ASSERT_TRUE(s.acc_m_s2.allFinite() && s.gyr_rad_s.allFinite());
 }
 
+// "calibrate+FILE.bvh": the calibration procedure (N-pose stand, knee bends with elbow curls)
+// with the feet planted where the clip starts, then the clip; "FILE.bvh" by name is the file.
+TEST(BvhMotion, CalibrationProcedureBeforeAFileByName) {
+  const std::string path = temp_bvh("mocap_sim_calib_walk_");
+  PerformerParams p;
+  p.motion = "walk";
+  p.loop = false;
+  const Performer original(p);
+  write_bvh(path, original);
+  PerformerParams bp = p;
+  bp.motion = path;
+  const Performer plain(bp);
+  bp.motion = "calibrate+" + path;
+  const Performer calibrated(bp);
+  std::filesystem::remove(path);
+  const double prelude_s = 3.0 + calibration_moves_s();
+  EXPECT_NEAR(plain.track().period_s(), 3.0 + 1.0 + 8.0, 1.0 / 60 + 1e-9);
+  EXPECT_NEAR(calibrated.track().period_s(), prelude_s + 1.0 + 8.0, 1.0 / 60 + 1e-9);
+  EXPECT_EQ(calibrated.calibration_window_s(), std::make_pair(0.0, 3.0));
+  // During the procedure the ankles stay where the N-pose put them, the knees bend, and the
+  // body faces the clip's first heading.
+  TruthFrame start, f;
+  calibrated.truth_at(0.0, start);
+  original.truth_at(4.0, f);
+  const auto yaw = [](const Eigen::Quaterniond& q) {
+    const Eigen::Vector3d x = q * Eigen::Vector3d::UnitX();
+    return std::atan2(x.y(), x.x());
+  };
+  EXPECT_NEAR(yaw(start.q_earth_segment[0]), yaw(f.q_earth_segment[0]), 0.1);
+  double max_ankle_shift_m = 0, max_knee_deg = 0;
+  for (double t = 0; t <= prelude_s; t += 0.05) {
+    calibrated.truth_at(t, f);
+    for (Segment foot : {Segment::foot_l, Segment::foot_r})
+      max_ankle_shift_m = std::max(
+          max_ankle_shift_m,
+          (f.p_earth_segment_m[index(foot)] - start.p_earth_segment_m[index(foot)]).norm());
+    max_knee_deg =
+        std::max(max_knee_deg, f.q_parent_segment[index(Segment::shank_l)].angularDistance(
+                                   Eigen::Quaterniond::Identity()) *
+                                   180 / M_PI);
+  }
+  EXPECT_LT(max_ankle_shift_m, 1e-6);
+  EXPECT_GT(max_knee_deg, 40.0);
+  // Then the clip, as the plain file plays it (shifted by the procedure minus the lead-in).
+  const auto [worst_deg, worst_m] = worst_difference(plain, calibrated, 4.5, 11.5, prelude_s - 3.0);
+  EXPECT_LT(worst_deg, 1e-6);
+  EXPECT_LT(worst_m, 1e-6);
+}
+
 TEST(BvhMotion, MissingFileIsAnError) {
   EXPECT_THROW(make_bvh_motion("/nonexistent/walk.bvh"), std::runtime_error);
+  EXPECT_THROW(make_motion("calibrate+/nonexistent/walk.BVH"), std::runtime_error);
+  try {
+    make_motion("walk.bvx");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("ending in .bvh"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -14,15 +15,19 @@
 #include "mocap/session/session_reader.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
+#include "mocap/skeleton/dropout_bridge.hpp"
+#include "mocap/skeleton/interpolation.hpp"
 
 namespace mocap::cmd {
 namespace {
 
 constexpr const char* kExportUsage =
-    "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh)\n"
+    "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh) [--rate HZ]\n"
     "Converts the poses recorded in SESSION. CSV columns: t (seconds since the recording\n"
     "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n"
-    "BVH: N-pose rest, centimetres, the session's mean frame interval, the recorded body height.\n";
+    "BVH: N-pose rest, centimetres, the recorded body, resampled to one fixed frame time (the\n"
+    "recorded pipeline rate or --rate). A sensor's dropout of up to 0.5 s is bridged (its\n"
+    "segment slerped across the gap).\n";
 
 /// Tells the user how reading ended when it did not end cleanly.
 void report_tail(const SessionReader& r, const std::string& path) {
@@ -39,98 +44,113 @@ void report_tail(const SessionReader& r, const std::string& path) {
                  static_cast<unsigned long long>(r.ignored_bytes()));
 }
 
-int export_csv(SessionReader& r, const std::string& in, const std::string& out) {
-  std::FILE* f = std::fopen(out.c_str(), "w");
-  if (!f) {
-    std::fprintf(stderr, "mocap export: cannot create '%s': %s\n", out.c_str(),
-                 std::strerror(errno));
-    return 1;
-  }
-  std::fprintf(f, "t,segment,w,x,y,z,px,py,pz\n");
-  const int64_t t0 = r.header().t_start_host_ns;
-  SessionReader::Block b;
-  long frames = 0;
-  while (r.next(b)) {
-    if (b.type != session::BlockType::pose) continue;
-    const double t = static_cast<double>(b.pose.t_ns - t0) * 1e-9;
-    for (int s = 0; s < kSegmentCount; ++s) {
-      const auto& q = b.pose.q_earth_segment[s];
-      const auto& p = b.pose.p_earth_segment_m[s];
-      std::fprintf(f, "%.6f,%.*s,%.6f,%.6f,%.6f,%.6f,%.5f,%.5f,%.5f\n", t,
-                   static_cast<int>(kSegmentNames[s].size()), kSegmentNames[s].data(), q[0], q[1],
-                   q[2], q[3], p[0], p[1], p[2]);
-    }
-    ++frames;
-  }
-  const bool write_ok = !std::ferror(f);
-  if (std::fclose(f) != 0 || !write_ok) {
-    std::fprintf(stderr, "mocap export: writing '%s' failed: %s\n", out.c_str(),
-                 std::strerror(errno));
-    return 1;
-  }
-  report_tail(r, in);
-  if (frames == 0) {
-    std::fprintf(stderr, "mocap export: %s holds no poses\n", in.c_str());
-    return 1;
-  }
-  std::fprintf(stderr, "mocap export: %ld frames -> %s\n", frames, out.c_str());
-  return 0;
-}
-
-/// Body height from the configuration recorded in the session (the one the poses were
-/// computed with); the default height, with a warning, if it does not parse.
-double recorded_height_m(const SessionReader& r, const std::string& in) {
+/// The configuration recorded in the session (body model, pipeline rate), or the defaults.
+daemon::Config recorded_config(const SessionReader& r, const std::string& in) {
   daemon::ConfigErrors errors;
   const auto cfg =
       daemon::parse_config(r.header().config_text, in + " (recorded config)", {}, errors);
-  if (cfg) return cfg->body.height_m;
-  const double fallback = daemon::BodyConfig{}.height_m;
+  if (cfg) return *cfg;
+  const daemon::Config fallback;
   std::fprintf(stderr,
                "mocap export: warning: the recorded configuration does not parse (%s); using "
                "body height %.2f m\n",
                errors.errors.empty() ? "empty" : errors.errors.front().to_string().c_str(),
-               fallback);
+               fallback.body.model.height_m);
   return fallback;
 }
 
-int export_bvh(SessionReader& r, const std::string& in, const std::string& out) {
-  // First pass: frame count and mean frame interval (BVH has one fixed frame time).
-  SessionReader::Block b;
+/// The session's poses, dropouts bridged (DropoutBridge), resampled to rate_hz if > 0.
+class FinishedPoses {
+ public:
+  FinishedPoses(const BodyDimensions& dims, double rate_hz) : bridge_(dims) {
+    if (rate_hz > 0) resampler_.emplace(rate_hz);
+  }
+  /// Calls emit(frame) for every pose of the session, in order.
+  template <typename Emit>
+  void run(SessionReader& r, Emit&& emit) {
+    SessionReader::Block b;
+    PoseFrame f;
+    const auto drain = [&] {
+      while (bridge_.next(f)) {
+        if (!resampler_) {
+          emit(f);
+          continue;
+        }
+        resampler_->push(f);
+        PoseFrame g;
+        while (resampler_->next(g))
+          emit(g);
+      }
+    };
+    while (r.next(b)) {
+      if (b.type != session::BlockType::pose) continue;
+      bridge_.push(b.pose);
+      drain();
+    }
+    bridge_.finish();
+    drain();
+  }
+  long bridged() const { return bridge_.bridged(); }
+
+ private:
+  DropoutBridge bridge_;
+  std::optional<PoseResampler> resampler_;
+};
+
+bool write_csv_row(std::FILE* f, double t, int s, const PoseFrame& p) {
+  const auto& q = p.q_earth_segment[s];
+  const auto& x = p.p_earth_segment_m[s];
+  return std::fprintf(f, "%.6f,%.*s,%.6f,%.6f,%.6f,%.6f,%.5f,%.5f,%.5f\n", t,
+                      static_cast<int>(kSegmentNames[s].size()), kSegmentNames[s].data(), q[0],
+                      q[1], q[2], q[3], x[0], x[1], x[2]) > 0;
+}
+
+int export_poses(SessionReader& r, const std::string& in, const std::string& out, bool bvh,
+                 double rate_hz) {
+  const daemon::Config cfg = recorded_config(r, in);
+  const BodyModel body(cfg.body.model);
+  // BVH has one fixed frame time: resample to the recorded pipeline rate unless told otherwise.
+  if (bvh && rate_hz <= 0) rate_hz = cfg.pipeline.rate_hz;
+  FinishedPoses poses(body.dimensions(), rate_hz);
   long frames = 0;
-  int64_t t_first = 0, t_last = 0;
-  while (r.next(b)) {
-    if (b.type != session::BlockType::pose) continue;
-    if (frames == 0) t_first = b.pose.t_ns;
-    t_last = b.pose.t_ns;
-    ++frames;
+  try {
+    if (bvh) {
+      BvhWriterOptions opt;
+      opt.frame_time_s = 1.0 / rate_hz;
+      BvhWriter writer(out, body, opt);
+      poses.run(r, [&](const PoseFrame& f) {
+        writer.write_frame(f);
+        ++frames;
+      });
+      writer.close();
+    } else {
+      std::FILE* f = std::fopen(out.c_str(), "w");
+      if (!f) throw std::runtime_error("cannot create '" + out + "': " + std::strerror(errno));
+      bool ok = std::fprintf(f, "t,segment,w,x,y,z,px,py,pz\n") > 0;
+      const int64_t t0 = r.header().t_start_host_ns;
+      poses.run(r, [&](const PoseFrame& p) {
+        const double t = static_cast<double>(p.t_ns - t0) * 1e-9;
+        for (int s = 0; s < kSegmentCount; ++s)
+          ok = write_csv_row(f, t, s, p) && ok;
+        ++frames;
+      });
+      ok = !std::ferror(f) && ok;
+      if (std::fclose(f) != 0 || !ok)
+        throw std::runtime_error("writing '" + out + "' failed: " + std::strerror(errno));
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mocap export: %s\n", e.what());
+    return 1;
   }
   report_tail(r, in);
   if (frames == 0) {
     std::fprintf(stderr, "mocap export: %s holds no poses\n", in.c_str());
     return 1;
   }
-  BvhWriterOptions opt;
-  if (frames > 1 && t_last > t_first)
-    opt.frame_time_s =
-        static_cast<double>(t_last - t_first) * 1e-9 / static_cast<double>(frames - 1);
-  const double height_m = recorded_height_m(r, in);
-  SessionReader again;
-  std::string error;
-  if (!again.open(in, &error)) {
-    std::fprintf(stderr, "mocap export: %s\n", error.c_str());
-    return 1;
-  }
-  try {
-    BvhWriter writer(out, BodyModel(body_dimensions_from_height(height_m)), opt);
-    while (again.next(b))
-      if (b.type == session::BlockType::pose) writer.write_frame(b.pose);
-    writer.close();
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "mocap export: %s\n", e.what());
-    return 1;
-  }
-  std::fprintf(stderr, "mocap export: %ld frames (%.3f s each, body height %.2f m) -> %s\n", frames,
-               opt.frame_time_s, height_m, out.c_str());
+  std::fprintf(stderr, "mocap export: %ld frames", frames);
+  if (rate_hz > 0) std::fprintf(stderr, " at %.6g Hz", rate_hz);
+  std::fprintf(stderr, " (body height %.2f m; %ld segment-frames bridged across dropouts) -> %s\n",
+               body.dimensions().height_m, poses.bridged(), out.c_str());
   return 0;
 }
 
@@ -140,6 +160,7 @@ int run_export(int argc, char** argv) {
   CliArgs args;
   args.option("csv", "write the poses as CSV to this file")
       .option("bvh", "write the poses as BVH to this file")
+      .option("rate", "resample to this frame rate, Hz (BVH default: the recorded pipeline rate)")
       .flag("help", "show this help");
   if (!args.parse(argc, argv, 1)) {
     std::fprintf(stderr, "mocap export: %s\n%s", args.error().c_str(), kExportUsage);
@@ -160,8 +181,14 @@ int run_export(int argc, char** argv) {
     std::fprintf(stderr, "mocap export: %s\n", error.c_str());
     return 1;
   }
-  if (args.has("csv")) return export_csv(reader, in, *args.get("csv"));
-  return export_bvh(reader, in, *args.get("bvh"));
+  double rate_hz = 0;
+  if (args.has("rate") &&
+      (!args.get_double("rate", rate_hz) || !(rate_hz > 0 && rate_hz <= 10000))) {
+    std::fprintf(stderr, "mocap export: --rate must be in (0, 10000] Hz\n");
+    return 2;
+  }
+  if (args.has("csv")) return export_poses(reader, in, *args.get("csv"), false, rate_hz);
+  return export_poses(reader, in, *args.get("bvh"), true, rate_hz);
 }
 
 }  // namespace mocap::cmd

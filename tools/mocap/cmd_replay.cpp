@@ -18,6 +18,7 @@
 #include "mocap/daemon/rig_engine.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
+#include "mocap/skeleton/dropout_bridge.hpp"
 
 namespace mocap::cmd {
 
@@ -25,20 +26,33 @@ namespace {
 
 using namespace mocap::daemon;
 
+/// The replayed poses as BVH, a sensor's short dropouts bridged (as `mocap export` does).
 class BvhSink final : public FrameSink {
  public:
-  BvhSink(const std::string& path, const Config& cfg) {
-    BodyModelConfig b;
-    b.height_m = cfg.body.height_m;
+  BvhSink(const std::string& path, const Config& cfg)
+      : bridge_(BodyModel(cfg.body.model).dimensions()) {
     BvhWriterOptions o;
     o.frame_time_s = 1.0 / cfg.pipeline.rate_hz;
-    writer_ = std::make_unique<BvhWriter>(path, BodyModel(b), o);
+    writer_ = std::make_unique<BvhWriter>(path, BodyModel(cfg.body.model), o);
   }
-  void publish(const PoseFrame& f) override { writer_->write_frame(f); }
-  void close() { writer_->close(); }
+  void publish(const PoseFrame& f) override {
+    bridge_.push(f);
+    drain();
+  }
+  void close() {
+    bridge_.finish();
+    drain();
+    writer_->close();
+  }
   int frames() const { return writer_->frames(); }
 
  private:
+  void drain() {
+    while (bridge_.next(out_))
+      writer_->write_frame(out_);
+  }
+  DropoutBridge bridge_;
+  PoseFrame out_;
   std::unique_ptr<BvhWriter> writer_;
 };
 

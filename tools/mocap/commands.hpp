@@ -6,6 +6,7 @@ namespace mocap::cmd {
 
 int run_filter(int argc, char** argv);
 int run_simulate(int argc, char** argv);
+int run_perform(int argc, char** argv);
 int run_replay(int argc, char** argv);
 int run_export(int argc, char** argv);
 int run_devices(int argc, char** argv);

@@ -15,6 +15,8 @@ struct Command {
 constexpr Command kCommands[] = {
     {"filter", mocap::cmd::run_filter, "run an attitude filter over a CSV of IMU samples"},
     {"simulate", mocap::cmd::run_simulate, "emulate a device: protocol bytes on a pty or UDP"},
+    {"perform", mocap::cmd::run_perform,
+     "run the virtual performer: its samples, ground truth and BVH to files"},
     {"replay", mocap::cmd::run_replay, "run a session or sample CSV through the pipeline offline"},
     {"export", mocap::cmd::run_export, "convert a recorded session to BVH or CSV"},
     {"devices", mocap::cmd::run_devices, "list connected devices that a driver supports"},

@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "mocap/core/log.hpp"
+#include "mocap/skeleton/body_model.hpp"
+#include "mocap/skeleton/joint_limits.hpp"
 
 namespace mocap::daemon {
 
@@ -44,7 +46,12 @@ struct FilterConfig {
 };
 
 struct BodyConfig {
-  double height_m = 1.75;
+  /// Height and per-segment offsets (file keys: height_m, [body.segment.NAME], and `model`, a
+  /// body file as config/body/default.toml read first; the inline keys override it).
+  BodyModelConfig model;
+  /// Joint limits: the anatomical defaults, then the `joint_limits` file's [joint.NAME]
+  /// overrides (as config/body/joint_limits.toml), then the inline [body.joint.NAME] tables.
+  JointLimits limits = default_joint_limits();
   bool enforce_limits = true;  ///< clamp joints to their limits
   bool root_motion = true;     ///< stance-foot root translation
 };
@@ -121,8 +128,9 @@ struct DemoConfig {
   std::string path = "device";         ///< "device" (simulated devices via ptys) or "direct"
   std::string protocol = "witmotion";  ///< wire protocol the simulated devices speak
   double rate_hz = 100.0;
-  /// A virtual-performer motion (sim::motion_names(), optionally "calibrate+"): by default the
-  /// calibration procedure (N-pose, knee bends with elbow curls) before the sequence.
+  /// A virtual-performer motion (sim::motion_names() or a BVH file, optionally "calibrate+"):
+  /// by default the calibration procedure (N-pose, knee bends with elbow curls) before the
+  /// sequence.
   std::string motion = "calibrate+sequence";
   uint64_t seed = 1;
 };

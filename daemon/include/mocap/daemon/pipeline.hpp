@@ -34,6 +34,7 @@ class RecordTap {
 struct PipelineStatus {
   PoseFrame frame;  ///< the last published frame (includes per-sensor SensorStatus)
   std::array<SensorFilterState, kMaxSensors> filter{};
+  CalibrationProgress calibration;
   uint64_t samples = 0, rejected = 0, ring_drops = 0, frames = 0;
   bool calibrating = false;
 };

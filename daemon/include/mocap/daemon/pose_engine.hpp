@@ -4,6 +4,7 @@
 // one (filter + skeleton); tests may plug in their own.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "mocap/core/imu_sample.hpp"
@@ -14,6 +15,22 @@ namespace mocap::daemon {
 
 /// The reference pose of a calibration (the skeleton module's enum).
 using CalibrationPose = mocap::CalibrationPose;
+
+/// How far the calibration has got (for the status): the last capture's outcome and each
+/// motion-identified mounting (knees, elbows, hands through the elbows). Fixed size: the
+/// pipeline copies it with every status snapshot.
+struct CalibrationProgress {
+  struct Mounting {
+    int8_t segment = -1;      ///< the segment whose mounting yaw the motion identifies
+    bool identified = false;  ///< enough flexion seen and the fit well-conditioned
+    float travel_deg = 0;     ///< flexion travel seen so far
+    float yaw_deg = 0;        ///< the identified correction of its mounting yaw
+  };
+  std::array<char, 160> message{};  ///< last capture's outcome, NUL-terminated ("" if none)
+  bool refining = false;            ///< refinement from motion is on and has a calibration
+  float needed_travel_deg = 0;      ///< travel a hinge needs to be identified
+  std::array<Mounting, 6> mountings{};
+};
 
 /// What an engine knows about one sensor's filter (for health reports).
 struct SensorFilterState {
@@ -37,6 +54,8 @@ class PoseEngine {
   /// segment_flags, kFrameCalibrated) from the current state. Must not allocate.
   virtual void build_frame(int64_t t_ns, PoseFrame& out) = 0;
   virtual SensorFilterState sensor_state(int sensor_index) const = 0;
+  /// The calibration's progress; engines without calibration report none.
+  virtual CalibrationProgress calibration_progress() const { return {}; }
   /// Takes the current sensor orientations as the given reference pose.
   virtual void calibrate(CalibrationPose pose) = 0;
   /// Re-aligns the heading so the performer faces +x (east) now.

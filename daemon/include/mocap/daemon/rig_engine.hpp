@@ -38,6 +38,7 @@ class RigEngine final : public PoseEngine {
   void set_sensor_live(int, bool) override {}
   void build_frame(int64_t t_ns, PoseFrame& out) override;
   SensorFilterState sensor_state(int sensor_index) const override;
+  CalibrationProgress calibration_progress() const override;
   void calibrate(CalibrationPose pose) override;
   void reset_heading() override;
 

@@ -44,6 +44,9 @@ struct AccuracyOptions {
   /// The calibration procedure includes the calibration moves (knee bends with elbow curls,
   /// make_motion("calibrate+<motion>")) after the N-pose; the evaluation starts after them.
   bool calibration_moves = false;
+  /// The sensors run for 22 s of walking and turning before the calibration stand
+  /// (make_motion("warmup+...")), as when a person puts them on and walks in.
+  bool warmup = false;
   /// Anchor each filter's heading at the N-pose calibration (AttitudeFilter::anchor_heading(),
   /// as the daemon does): a hard-iron offset learnt later does not turn the calibration.
   bool anchor_heading = true;

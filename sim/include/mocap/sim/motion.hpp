@@ -32,23 +32,29 @@ class Motion {
   virtual const BodyDimensions* dimensions() const { return nullptr; }
 };
 
-/// A BVH file as motion input (via the skeleton's BvhMotion): a `lead_in_s` N-pose stand facing
-/// the clip's first heading (calibration), a smooth `blend_s` transition into the first frame,
-/// then the clip, interpolated with Catmull-Rom (C1) so the virtual accelerometers see finite
-/// accelerations. Carries its own root trajectory and the file's body dimensions. Throws
-/// std::runtime_error for unreadable or unrecognisable files.
+/// A BVH file as motion input (via the skeleton's BvhMotion): `prelude` if given (a motion
+/// without root translation that starts and ends in the N-pose, e.g. the calibration procedure;
+/// played facing the clip's first heading, its feet planted where the N-pose puts them), a
+/// `lead_in_s` N-pose stand, a smooth `blend_s` transition into the first frame, then the clip,
+/// interpolated with Catmull-Rom (C1) so the virtual accelerometers see finite accelerations.
+/// The calibration window is the prelude's, else the lead-in. Carries its own root trajectory
+/// and the file's body dimensions. Throws std::runtime_error for unreadable or unrecognisable
+/// files.
 std::unique_ptr<Motion> make_bvh_motion(const std::string& path, double lead_in_s = 3.0,
-                                        double blend_s = 1.0);
+                                        double blend_s = 1.0,
+                                        std::shared_ptr<const Motion> prelude = nullptr);
 
 /// Names accepted by make_motion: "npose", "walk", "turn", "squat", "arm_raise", "reach" (each
 /// preceded by a 3 s N-pose stand and followed by a 1 s stand) and "sequence" (all of them
 /// strung together: stand, walk, turn, walk back, turn, squat, arm raises, reach).
 std::span<const std::string_view> motion_names();
 
-/// The built-in motion of that name; throws std::invalid_argument naming the valid names.
-/// "calibrate+<name>" (e.g. "calibrate+squat"): the 3 s N-pose stand, then the calibration
-/// moves (two shallow knee bends with elbow curls, 4 s, then a 1 s stand: calibration_moves_s()
-/// in all), then the motion without its own leading stand.
+/// The built-in motion of that name, or a BVH file for a name ending in ".bvh"
+/// (make_bvh_motion); throws std::invalid_argument naming the valid names (std::runtime_error
+/// for an unreadable file). "calibrate+<name>" (e.g. "calibrate+squat", "calibrate+take.bvh"):
+/// the 3 s N-pose stand, then the calibration moves (two shallow knee bends with elbow curls,
+/// 4 s, then a 1 s stand: calibration_moves_s() in all), then the motion without its own
+/// leading stand.
 std::unique_ptr<Motion> make_motion(std::string_view name);
 
 /// Duration of the calibration moves including their closing 1 s stand, seconds.

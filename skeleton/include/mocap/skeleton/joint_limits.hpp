@@ -48,6 +48,8 @@ void validate(const JointLimits& limits);
 ///   b_deg = [-5, 150]       # also a_deg, twist_deg; hinge = true/false
 /// Throws std::runtime_error naming source:line:column and the problem.
 JointLimits parse_joint_limits(std::string_view toml_text, std::string_view source = "limits");
+/// Reads and parses a joint-limits file (throws std::runtime_error on I/O or parse errors).
+JointLimits load_joint_limits(const std::string& path);
 
 struct JointCheck {
   double violation_deg = 0;  ///< angle between the joint rotation and its clamped version

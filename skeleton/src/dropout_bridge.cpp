@@ -1,0 +1,67 @@
+// Dropout bridging of a pose stream (see dropout_bridge.hpp).
+#include "mocap/skeleton/dropout_bridge.hpp"
+
+#include <cmath>
+
+#include "mocap/skeleton/forward_kinematics.hpp"
+#include "mocap/skeleton/quat_math.hpp"
+
+namespace mocap {
+namespace {
+
+/// Age of the newest sample of the sensor driving segment s, ns; -1 if none drives it.
+int64_t sample_age_ns(const PoseFrame& f, int s) {
+  const uint32_t n = std::min<uint32_t>(f.sensor_count, kMaxSensors);
+  for (uint32_t k = 0; k < n; ++k)
+    if (f.sensors[k].segment == s && std::isfinite(f.sensors[k].last_age_ms) &&
+        f.sensors[k].last_age_ms >= 0)
+      return static_cast<int64_t>(std::llround(f.sensors[k].last_age_ms * 1e6));
+  return -1;
+}
+
+}  // namespace
+
+DropoutBridge::DropoutBridge(const BodyDimensions& dims, int64_t nominal_gap_ns,
+                             int64_t max_bridge_ns)
+    : dims_(dims), max_bridge_ns_(max_bridge_ns) {
+  for (auto& t : tracks_)
+    t = OrientationTrack(nominal_gap_ns, max_bridge_ns);
+}
+
+void DropoutBridge::push(const PoseFrame& f) {
+  if (!queue_.empty() && f.t_ns <= queue_.back().t_ns) return;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    const int64_t age_ns = sample_age_ns(f, s);
+    // A key per new sample: a held orientation repeats the same sample time and is ignored.
+    if (age_ns >= 0 && (f.segment_flags[s] & kSegTracked))
+      tracks_[s].push(f.t_ns - age_ns, from_wxyz(f.q_earth_segment[s]));
+  }
+  queue_.push_back(f);
+}
+
+bool DropoutBridge::next(PoseFrame& out) {
+  if (queue_.empty()) return false;
+  if (!finished_ && queue_.back().t_ns - queue_.front().t_ns < max_bridge_ns_) return false;
+  out = queue_.front();
+  queue_.pop_front();
+  std::array<Eigen::Quaterniond, kSegmentCount> q;
+  bool changed = false;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    q[s] = from_wxyz(out.q_earth_segment[s]);
+    if (!(out.segment_flags[s] & kSegTracked)) continue;
+    // Bridged: the frame falls between two of the segment's samples further apart than
+    // nominal_gap_ns (and at most max_bridge_ns).
+    const OrientationTrack::Sample smp = tracks_[s].sample(out.t_ns);
+    if (!smp.valid || !smp.bridged) continue;
+    q[s] = smp.q;
+    changed = true;
+    ++bridged_;
+  }
+  if (changed) {
+    const auto& p = out.p_earth_segment_m[0];
+    pose_from_earth_orientations(dims_, q, Eigen::Vector3d(p[0], p[1], p[2]), out);
+  }
+  return true;
+}
+
+}  // namespace mocap
