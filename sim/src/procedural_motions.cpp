@@ -70,17 +70,24 @@ void stand(double, double, BodyPose&) {}
 
 void walk(double t, double d, BodyPose& p) {
   const double cycle_s = 1.1;
+  const double swing_hip_deg = 22, swing_toe_down_deg = 30;
   const double a = envelope(t, d, 1.0);
   const double phase_l = t / cycle_s, phase_r = phase_l + 0.5;
   const double c_l = std::cos(2 * std::numbers::pi * phase_l);
   // Own phase 0: heel strike with the hip flexed 20 deg; stance while the hip extends to -20
   // (phase 0.5); the heel rises from 0.3 (the foot rolls onto the toe, up to 30 deg at toe-off)
-  // and the knee flexes up to 60 deg in swing.
+  // and the knee flexes up to 60 deg in swing. In swing the hip flexes early (to ~25 deg by
+  // late swing, then back to 20 at heel strike) and the foot points toe-down after toe-off (up
+  // to ~45 deg while the knee flexes), levelling out by late swing for the flat landing: the
+  // ankle dorsiflexes at most ~12 deg (the level swing foot reached ~60, beyond the 20 deg
+  // limit) and the toe clears the floor by ~3 cm when the feet pass.
   auto leg_at = [&](bool left, double phase) {
     const double u = frac(phase);
-    const double hip = a * 20 * std::cos(2 * std::numbers::pi * phase);
+    const double hip =
+        a * (20 * std::cos(2 * std::numbers::pi * phase) + swing_hip_deg * bump((u - 0.55) / 0.45));
     const double knee = a * 60 * bump((u - 0.45) / 0.55);
-    const double toe_down = a * 30 * bump((u - 0.3) / 0.5);
+    const double toe_down =
+        a * (30 * bump((u - 0.3) / 0.5) + swing_toe_down_deg * bump((u - 0.5) / 0.4));
     leg(p, left, hip, knee, -toe_down);
   };
   leg_at(true, phase_l);

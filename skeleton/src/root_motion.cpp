@@ -13,11 +13,13 @@ RootMotion::RootMotion(const BodyModel& model, RootMotionOptions options)
 
 void RootMotion::reset(const Eigen::Vector3d& p_m) {
   anchored_ = false;
+  have_prev_ = false;
   root_m_ = Eigen::Vector3d(p_m.x(), p_m.y(), pelvis_height_m_);
 }
 
 Eigen::Vector3d RootMotion::update(const std::array<Eigen::Vector3d, kSegmentCount>& p_rel,
-                                   const std::array<Eigen::Quaterniond, kSegmentCount>& q) {
+                                   const std::array<Eigen::Quaterniond, kSegmentCount>& q,
+                                   double dt_s) {
   if (opt_.pinned) {
     Eigen::Vector3d p = opt_.pinned_position_m;
     if (p.z() < 0) p.z() = pelvis_height_m_;
@@ -49,6 +51,10 @@ Eigen::Vector3d RootMotion::update(const std::array<Eigen::Vector3d, kSegmentCou
   const int other = 1 - cur;
   int new_foot = cur;
   if (low[other] < low[cur] - opt_.stance_hysteresis_m) new_foot = other;
+  const double gap = low[cur] - low[other];
+  if (opt_.lift_rate_m_s > 0 && dt_s > 0 && have_prev_ && gap > opt_.lift_gap_m &&
+      gap - prev_gap_m_ > opt_.lift_rate_m_s * dt_s)
+    new_foot = other;
   const int new_point = pt[new_foot][0].z() <= pt[new_foot][1].z() ? 0 : 1;
   if (new_foot != cur || new_point != anchor_point_) {
     if (new_foot != cur ||
@@ -58,6 +64,8 @@ Eigen::Vector3d RootMotion::update(const std::array<Eigen::Vector3d, kSegmentCou
       anchor_xy_ = root_xy + pt[cur][anchor_point_].head<2>();
     }
   }
+  prev_gap_m_ = low[cur] - low[1 - cur];
+  have_prev_ = true;
   stance_foot_ = feet[cur];
   root_m_ = Eigen::Vector3d(root_xy.x(), root_xy.y(), root_z);
   return root_m_;

@@ -187,7 +187,7 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
     p_rel_[i] = p_rel_[p] + q_earth_[p] * model_.joint_offset_m(i);
   }
   // 5. Root motion.
-  const Eigen::Vector3d root = root_.update(p_rel_, q_earth_);
+  const Eigen::Vector3d root = root_.update(p_rel_, q_earth_, dt_s);
   for (int i = 0; i < kSegmentCount; ++i)
     p_earth_[i] = p_rel_[i] + root;
   if (!opt_.root.pinned) flags[root_.stance_foot()] |= kSegStance;

@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "mocap/sim/motion.hpp"
+#include "mocap/skeleton/joint_limits.hpp"
 
 namespace mocap::sim {
 namespace {
@@ -151,6 +153,102 @@ TEST(Motion, WalkAdvancesWithAPlantedStanceFoot) {
   // About 1 m/s over most of 8.8 s of walking, straight ahead (+x).
   EXPECT_GT(pose.p_earth_pelvis_m.x(), 6.0);
   EXPECT_LT(std::abs(pose.p_earth_pelvis_m.y()), 0.2);
+}
+
+// The walk's ankles (and every other joint) stay within the body model's joint limits over the
+// whole motion, checked with the skeleton's checker on the true joint rotations: the swing foot
+// points toe-down after toe-off instead of staying level (which dorsiflexed the ankle ~60 deg).
+TEST(Motion, WalkJointsStayWithinTheJointLimits) {
+  const auto dims = body_dimensions_from_height(1.75);
+  const JointLimits limits = default_joint_limits();
+  MotionTrack track(make_motion("walk"), dims, false);
+  BodyPose pose;
+  TruthFrame f;
+  double worst_deg = 0, max_dorsi_deg = 0, max_plantar_deg = 0;
+  for (double t = 0; t <= track.period_s(); t += 0.005) {
+    track.pose(t, pose);
+    truth_forward_kinematics(dims, pose, f);
+    for (int s = 1; s < kSegmentCount; ++s) {
+      const JointCheck c = check_joint(limits.joint[s], f.q_parent_segment[s]);
+      worst_deg = std::max(worst_deg, c.violation_deg);
+      if (s == index(Segment::foot_l) || s == index(Segment::foot_r)) {
+        max_dorsi_deg = std::max(max_dorsi_deg, -c.b_deg);
+        max_plantar_deg = std::max(max_plantar_deg, c.b_deg);
+      }
+    }
+  }
+  std::printf(
+      "walk: worst joint-limit violation %.2g deg, ankle dorsiflexion up to %.1f deg, "
+      "plantarflexion up to %.1f deg\n",
+      worst_deg, max_dorsi_deg, max_plantar_deg);
+  EXPECT_LT(worst_deg, 1e-6);
+  // Within the open-chain (unloaded) dorsiflexion range of 20 deg too, the swing foot's range,
+  // not only the weight-bearing 35 of the model; and the ankle really moves (not frozen).
+  EXPECT_LT(max_dorsi_deg, 20);
+  EXPECT_GT(max_dorsi_deg, 10);
+  EXPECT_GT(max_plantar_deg, 10);
+}
+
+// Every built-in motion, after the calibration procedure (N-pose, knee bends, elbow curls),
+// keeps the legs' joints (hips, knees, ankles) within the body model's joint limits; the squat
+// and the knee bends (feet flat, shank inclined 25 deg) dorsiflex the ankle 25 deg, within its
+// weight-bearing 35. (The arm raise's wrist and the reach's shoulder go beyond the arms'
+// default limits: not covered here.)
+TEST(Motion, EveryBuiltInKeepsTheLegsWithinTheJointLimits) {
+  const auto dims = body_dimensions_from_height(1.75);
+  const JointLimits limits = default_joint_limits();
+  BodyPose pose;
+  TruthFrame f;
+  for (std::string_view name : motion_names()) {
+    if (name == "npose") continue;
+    MotionTrack track(make_motion("calibrate+" + std::string(name)), dims, false);
+    double worst_deg = 0;
+    int worst_segment = 0;
+    for (double t = 0; t <= track.period_s(); t += 0.01) {
+      track.pose(t, pose);
+      truth_forward_kinematics(dims, pose, f);
+      for (Segment seg : {Segment::thigh_l, Segment::shank_l, Segment::foot_l, Segment::thigh_r,
+                          Segment::shank_r, Segment::foot_r}) {
+        const int s = index(seg);
+        const double v = check_joint(limits.joint[s], f.q_parent_segment[s]).violation_deg;
+        if (v > worst_deg) {
+          worst_deg = v;
+          worst_segment = s;
+        }
+      }
+    }
+    EXPECT_LT(worst_deg, 1e-6) << name << ": " << kSegmentNames[worst_segment];
+  }
+}
+
+// Toe clearance: while the swing foot passes the stance foot (their ankles within 15 cm along
+// the walking direction x) its lowest point (heel or pitched toe) is 1..6 cm above the floor,
+// like a real swing foot (minimum toe clearance ~1-2 cm); it never scuffs the floor then.
+TEST(Motion, WalkSwingFootClearsTheFloorLikeARealFoot) {
+  const auto dims = body_dimensions_from_height(1.75);
+  MotionTrack track(make_motion("walk"), dims, false);
+  BodyPose pose;
+  TruthFrame f;
+  double min_clearance = 1, max_clearance = 0;
+  int passing = 0;
+  for (double t = 5.0; t < 10.0; t += 0.005) {
+    track.pose(t, pose);
+    truth_forward_kinematics(dims, pose, f);
+    const Eigen::Vector3d l = contact(dims, f, Segment::foot_l);
+    const Eigen::Vector3d r = contact(dims, f, Segment::foot_r);
+    const bool left_swing = l.z() > r.z();
+    const Eigen::Vector3d swing = left_swing ? l : r, stance = left_swing ? r : l;
+    const double dx = f.p_earth_segment_m[index(Segment::foot_l)].x() -
+                      f.p_earth_segment_m[index(Segment::foot_r)].x();
+    if (std::abs(dx) > 0.15 || stance.z() > 0.003) continue;
+    ++passing;
+    min_clearance = std::min(min_clearance, swing.z());
+    max_clearance = std::max(max_clearance, swing.z());
+  }
+  std::printf("swing foot clearance while passing: %.3f .. %.3f m\n", min_clearance, max_clearance);
+  EXPECT_GT(passing, 50);
+  EXPECT_GT(min_clearance, 0.01);
+  EXPECT_LT(max_clearance, 0.06);
 }
 
 TEST(Motion, LoopContinuesWhereThePreviousLoopEnded) {

@@ -1,9 +1,10 @@
 // Root motion: moves the pelvis across the floor by keeping the stance foot's contact point
 // fixed on the ground (floor at z = 0), or pins it. Each foot has two contact points, heel
 // (below the ankle) and toe (the foot's end point); the stance foot is the lower foot with
-// hysteresis, and its lower contact point is the anchor. Switching anchor re-anchors at the new
-// point's current position, so the root never jumps. Vertical: the lowest contact point rests on
-// the floor.
+// hysteresis, or the other foot as soon as the stance foot's heel or toe lifts off (toe-off
+// timing: a real swing foot points toe-down and its toe leaves the floor moving forward), and
+// its lower contact point is the anchor. Switching anchor re-anchors at the new point's current
+// position, so the root never jumps. Vertical: the lowest contact point rests on the floor.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -24,6 +25,13 @@ struct RootMotionOptions {
   /// true: both contact points of a foot are its ankle projected to the sole (planted-ankle
   /// model, like the simulator); false: heel and toe points (rolling foot).
   bool ankle_contact = false;
+  /// Toe-off timing (needs dt_s > 0 in update()): the other foot also takes over when it is
+  /// lower by lift_gap_m and the gap opens faster than lift_rate_m_s (the stance foot's heel or
+  /// toe is lifting off: a pitched swing foot leaves the floor at ~1 m/s), instead of waiting
+  /// for stance_hysteresis_m, during which the anchor would ride on the lifting toe.
+  /// lift_rate_m_s = 0: off.
+  double lift_gap_m = 0.005;
+  double lift_rate_m_s = 0.3;
 };
 
 class RootMotion {
@@ -31,10 +39,11 @@ class RootMotion {
   RootMotion(const BodyModel& model, RootMotionOptions options = {});
 
   /// p_rel: joint positions with the pelvis at the origin; q: earth-frame segment orientations.
+  /// dt_s: time since the previous update (0: unknown, contact timing off for this frame).
   /// Returns the pelvis position in the earth frame. stance_foot: index of the stance foot
   /// segment (foot_l / foot_r).
   Eigen::Vector3d update(const std::array<Eigen::Vector3d, kSegmentCount>& p_rel,
-                         const std::array<Eigen::Quaterniond, kSegmentCount>& q);
+                         const std::array<Eigen::Quaterniond, kSegmentCount>& q, double dt_s = 0);
   int stance_foot() const { return stance_foot_; }
   /// Places the pelvis at p_m (x, y; z is recomputed) and forgets the anchor.
   void reset(const Eigen::Vector3d& p_m = Eigen::Vector3d::Zero());
@@ -49,6 +58,8 @@ class RootMotion {
   int anchor_point_ = 0;  ///< 0 heel, 1 toe
   Eigen::Vector2d anchor_xy_ = Eigen::Vector2d::Zero();
   Eigen::Vector3d root_m_ = Eigen::Vector3d::Zero();
+  bool have_prev_ = false;
+  double prev_gap_m_ = 0;  ///< previous frame's stance-foot height above the other foot
 };
 
 }  // namespace mocap
