@@ -147,11 +147,13 @@ void arm_raise(double t, double d, BodyPose& p) {
       set(p, Segment::upper_arm_r, rx(-95 * u));
       set(p, Segment::forearm_r, ry(-60 * u));
       break;
-    default:  // elbow curls, arms hanging, wrists flexing
+    default:  // elbow curls (palms facing each other), wrists flexing
+      // The palms face the body's midline, so wrist flexion is about x (left: -, right: +
+      // mirrored) and the small deviation about y.
       set(p, Segment::forearm_l, ry(-130 * u));
       set(p, Segment::forearm_r, ry(-130 * u));
-      set(p, Segment::hand_l, ry(-40 * u) * rx(15 * u));
-      set(p, Segment::hand_r, ry(40 * u) * rx(-15 * u));
+      set(p, Segment::hand_l, rx(-40 * u) * ry(-15 * u));
+      set(p, Segment::hand_r, rx(40 * u) * ry(15 * u));
       break;
   }
 }
