@@ -719,11 +719,8 @@ toml::table body_to_toml(const BodyConfig& b) {
   const JointLimits defaults = default_joint_limits();
   toml::table joints;
   for (int i = 1; i < kSegmentCount; ++i) {
-    const JointLimit &l = b.limits.joint[i], &d = defaults.joint[i];
-    if (l.limited == d.limited && l.hinge == d.hinge && l.a_min_deg == d.a_min_deg &&
-        l.a_max_deg == d.a_max_deg && l.b_min_deg == d.b_min_deg && l.b_max_deg == d.b_max_deg &&
-        l.twist_min_deg == d.twist_min_deg && l.twist_max_deg == d.twist_max_deg)
-      continue;
+    const JointLimit& l = b.limits.joint[i];
+    if (l == defaults.joint[i]) continue;
     joints.insert(std::string(kJointNames[i]),
                   toml::table{{"limited", l.limited},
                               {"hinge", l.hinge},

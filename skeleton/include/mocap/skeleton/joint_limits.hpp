@@ -27,6 +27,7 @@ struct JointLimit {
   double a_min_deg = 0, a_max_deg = 0;
   double b_min_deg = 0, b_max_deg = 0;
   double twist_min_deg = 0, twist_max_deg = 0;
+  bool operator==(const JointLimit&) const = default;
 };
 
 struct JointLimits {
