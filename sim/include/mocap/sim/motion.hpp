@@ -54,7 +54,9 @@ std::span<const std::string_view> motion_names();
 /// for an unreadable file). "calibrate+<name>" (e.g. "calibrate+squat", "calibrate+take.bvh"):
 /// the 3 s N-pose stand, then the calibration moves (two shallow knee bends with elbow curls,
 /// 4 s, then a 1 s stand: calibration_moves_s() in all), then the motion without its own
-/// leading stand.
+/// leading stand. "warmup+<name>" (built-in motions, e.g. "warmup+calibrate+walk"): 22.4 s of
+/// walking there and back first, as when a person puts the sensors on and walks in; the
+/// calibration window is the stand after it.
 std::unique_ptr<Motion> make_motion(std::string_view name);
 
 /// Duration of the calibration moves including their closing 1 s stand, seconds.
