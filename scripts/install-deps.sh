@@ -10,7 +10,7 @@ build_pkgs=(build-essential cmake ninja-build pkg-config git
   libglfw3-dev libgl-dev libgl1-mesa-dri libtomlplusplus-dev nlohmann-json3-dev
   zlib1g-dev libpng-dev xvfb xauth)
 test_pkgs=(libgtest-dev libgmock-dev libbenchmark-dev clang-14 libclang-rt-14-dev
-  libfuzzer-14-dev liblo-tools socat python3 blender)
+  libfuzzer-14-dev liblo-tools socat python3 blender xdotool)
 
 want=("${build_pkgs[@]}")
 if [[ "${1:-}" == "--test" ]]; then want+=("${test_pkgs[@]}"); fi
