@@ -117,7 +117,7 @@ void AttitudeFilter::refresh_coeffs() {
 // Period of one stream from its timestamps. Returns false (and counts) for a timestamp that
 // does not advance. dt_s is 0 for a stream's first sample.
 bool AttitudeFilter::stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double& ts_nom,
-                               double& dt_s) {
+                               int& long_run, double& dt_s) {
   if (!have) {
     have = true;
     t_last = t_ns;
@@ -136,15 +136,25 @@ bool AttitudeFilter::stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double
     return true;
   }
   // Track the nominal period: small jitter by averaging; a genuinely different rate by
-  // steady drift; gaps (> 5 periods) are counted and leave the period alone.
-  if (dt_s < 2 * ts_nom && dt_s > 0.5 * ts_nom)
+  // steady drift; gaps (> 5 periods) are counted and leave the period alone, unless they come
+  // three in a row: then the period in use is wrong (a first interval from samples read in
+  // one burst, stamped microseconds apart) or the rate really dropped, and the interval is
+  // the period. Without that a period locked on 56 us held every time constant 180x too
+  // long (the demo's sensors never got a reference field).
+  if (dt_s <= 5 * ts_nom) long_run = 0;
+  if (dt_s < 2 * ts_nom && dt_s > 0.5 * ts_nom) {
     ts_nom += 0.02 * (dt_s - ts_nom);
-  else if (dt_s <= 0.5 * ts_nom)
+  } else if (dt_s <= 0.5 * ts_nom) {
     ts_nom *= 0.95;
-  else if (dt_s <= 5 * ts_nom)
+  } else if (dt_s <= 5 * ts_nom) {
     ts_nom *= 1.02;
-  else
+  } else {
     ++cnt_.gaps;
+    if (++long_run >= 3) {
+      ts_nom = dt_s;
+      long_run = 0;
+    }
+  }
   // Re-derive coefficients when a tracked period moved more than 2 % from the one in use.
   auto moved = [](double nom, double used) {
     return nom > 0 && std::abs(nom - used) > 0.02 * used;
@@ -159,21 +169,24 @@ void AttitudeFilter::update(const ImuSample& s) {
   double dt_s = 0;
   if (s.has(kFieldGyr)) {
     if (filt::check_vector(s.gyr_rad_s, 0.0, p_.max_gyr_rad_s, cnt_) &&
-        stream_dt(s.t_host_ns, st_.have_gyr, st_.t_gyr_ns, st_.gyr_ts_nom_s, dt_s)) {
+        stream_dt(s.t_host_ns, st_.have_gyr, st_.t_gyr_ns, st_.gyr_ts_nom_s, st_.gyr_long_run,
+                  dt_s)) {
       ++cnt_.gyr_ok;
       update_gyr(s.gyr_rad_s, dt_s);
     }
   }
   if (s.has(kFieldAcc)) {
     if (filt::check_vector(s.acc_m_s2, 1e-3, p_.max_acc_m_s2, cnt_) &&
-        stream_dt(s.t_host_ns, st_.have_acc, st_.t_acc_ns, st_.acc_ts_nom_s, dt_s)) {
+        stream_dt(s.t_host_ns, st_.have_acc, st_.t_acc_ns, st_.acc_ts_nom_s, st_.acc_long_run,
+                  dt_s)) {
       ++cnt_.acc_ok;
       update_acc(s.acc_m_s2, dt_s);
     }
   }
   if (s.has(kFieldMag)) {
     if (filt::check_vector(s.mag_uT, 1e-6, p_.max_mag_uT, cnt_) &&
-        stream_dt(s.t_host_ns, st_.have_mag, st_.t_mag_ns, st_.mag_ts_nom_s, dt_s)) {
+        stream_dt(s.t_host_ns, st_.have_mag, st_.t_mag_ns, st_.mag_ts_nom_s, st_.mag_long_run,
+                  dt_s)) {
       ++cnt_.mag_ok;
       update_mag(s.mag_uT, dt_s);
     }

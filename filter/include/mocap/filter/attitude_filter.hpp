@@ -192,6 +192,7 @@ struct FilterState {
   bool have_gyr = false, have_acc = false, have_mag = false;
   int64_t t_gyr_ns = 0, t_acc_ns = 0, t_mag_ns = 0;
   double gyr_ts_nom_s = 0, acc_ts_nom_s = 0, mag_ts_nom_s = 0;  ///< tracked sampling periods
+  int gyr_long_run = 0, acc_long_run = 0, mag_long_run = 0;     ///< see stream_dt
   Eigen::Vector3d last_gyr_rad_s = Eigen::Vector3d::Zero();
   filt::LatencyEstimator mag_latency;
   // inclination
@@ -370,7 +371,9 @@ class AttitudeFilter {
   void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
   void update_gain(const Eigen::Vector2d& residual, const Eigen::Matrix<double, 2, 9>& reg,
                    const Eigen::Matrix3d& r_lp);
-  bool stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double& ts_nom, double& dt_s);
+  /// long_run: consecutive intervals over 5 nominal periods (three re-set the period).
+  bool stream_dt(int64_t t_ns, bool& have, int64_t& t_last, double& ts_nom, int& long_run,
+                 double& dt_s);
   void refresh_coeffs();
 
   FilterParams p_;
