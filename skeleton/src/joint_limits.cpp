@@ -66,8 +66,10 @@ JointLimits default_joint_limits() {
   j[index(Segment::forearm_l)] = elbow;
   // Wrist (palms face the thighs in N-pose): flexion/extension about x, deviation about y.
   j[index(Segment::hand_l)] = ball(2, 0, 1, -80, 70, -20, 35, -20, 20);
-  // Hip: flexion 125 (-b), extension 20; abduction 45, adduction 25; rotation -40..45.
-  j[index(Segment::thigh_l)] = ball(2, 0, 1, -25, 45, -125, 20, -40, 45);
+  // Hip: flexion 125 (-b), extension 30 (the normal range; a walk's push-off reaches 20, and
+  // a limit at exactly 20 flagged every stride's tracking error); abduction 45, adduction 25;
+  // rotation -40..45.
+  j[index(Segment::thigh_l)] = ball(2, 0, 1, -25, 45, -125, 30, -40, 45);
   // Knee: hinge about y, flexion 150 (+b), 5 of hyperextension, 10 off-axis, twist +-30.
   JointLimit knee = ball(2, 0, 1, -10, 10, -5, 150, -30, 30);
   knee.hinge = true;

@@ -50,9 +50,9 @@ TEST(JointLimits, AnatomicalPosesPassImpossibleOnesViolate) {
   // Knee flexed 90 (shank back): fine; knee bent forward 20: 15 deg violation.
   EXPECT_EQ(v(Segment::shank_r, rot(1, 90)), 0);
   EXPECT_NEAR(v(Segment::shank_r, rot(1, -20)), 15, 1e-9);
-  // Hip flexed 90 forward: fine; 60 deg backwards: 40 beyond extension.
+  // Hip flexed 90 forward: fine; 60 deg backwards: 30 beyond extension.
   EXPECT_EQ(v(Segment::thigh_l, rot(1, -90)), 0);
-  EXPECT_NEAR(v(Segment::thigh_l, rot(1, 60)), 40, 1e-9);
+  EXPECT_NEAR(v(Segment::thigh_l, rot(1, 60)), 30, 1e-9);  // extension limit 30
   // Shoulder abducted to T-pose: left +90 about x, right -90 about x; the wrong way is adduction.
   EXPECT_EQ(v(Segment::upper_arm_l, rot(0, 90)), 0);
   EXPECT_EQ(v(Segment::upper_arm_r, rot(0, -90)), 0);
