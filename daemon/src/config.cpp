@@ -382,24 +382,20 @@ void read_body(TableReader& b, BodyConfig& body, Ctx& ctx) {
     return " (included by " + source_of(*n) + ":" + std::to_string(n->source().begin.line) +
            " body." + key + ")";
   };
-  if (!model_file.empty()) {
+  // An included file: its own errors at its own lines, naming the key that included it.
+  const auto include = [&](const char* key, const std::string& file, auto load) {
+    if (file.empty()) return;
     try {
-      body.model = load_body_config(model_file);
+      load(file);
     } catch (const TomlPositionError& e) {
-      add_table_error(e, "", included("model"));
+      add_table_error(e, "", included(key));
     } catch (const std::exception& e) {
-      ctx.add(b.node("model"), "body.model", e.what());
+      ctx.add(b.node(key), std::string("body.") + key, e.what());
     }
-  }
-  if (!limits_file.empty()) {
-    try {
-      body.limits = load_joint_limits(limits_file);
-    } catch (const TomlPositionError& e) {
-      add_table_error(e, "", included("joint_limits"));
-    } catch (const std::exception& e) {
-      ctx.add(b.node("joint_limits"), "body.joint_limits", e.what());
-    }
-  }
+  };
+  include("model", model_file, [&](const std::string& f) { body.model = load_body_config(f); });
+  include("joint_limits", limits_file,
+          [&](const std::string& f) { body.limits = load_joint_limits(f); });
   b.num("height_m", body.model.height_m, kMinBodyHeightM, kMaxBodyHeightM);
   if (const toml::node* n = b.node("segment")) {
     try {
