@@ -75,10 +75,7 @@ TEST(Accuracy, HingeRefinementRemovesTheCalibrationHeadingError) {
 TEST(Accuracy, SquatAfterCalibrationMoves) {
   // N-pose + calibration moves (knee bends with elbow curls), then the squat.
   for (uint64_t seed : {1, 2}) {
-    AccuracyOptions o;
-    o.motion = "squat";
-    o.seed = seed;
-    o.calibration_moves = true;
+    AccuracyOptions o = after_moves("squat", seed);
     const AccuracyResult r = run_accuracy(o);
     ASSERT_TRUE(r.calibrated) << r.calibration_message;
     record(r);
@@ -95,10 +92,7 @@ TEST(Accuracy, HingeResultsDoNotDependOnTheCalibrationHeadingSource) {
   // offsets are re-estimated under it whenever it changes (HeadingCoupling::rebase), so the
   // knees and elbows are too. Before, the coupling kept what it learnt under the N-pose
   // calibration: squat after the moves, seed 4, 1.92 (pelvis) vs 2.16 deg (mount normals).
-  AccuracyOptions o;
-  o.motion = "squat";
-  o.seed = 4;
-  o.calibration_moves = true;
+  AccuracyOptions o = after_moves("squat", 4);
   o.heading = HeadingSource::pelvis_sensor;
   const AccuracyResult pelvis = run_accuracy(o);
   o.heading = HeadingSource::mount_normals;
@@ -132,10 +126,7 @@ TEST(Accuracy, BasinHysteresisMakesTheArmRaiseIndependentOfTheHeadingSource) {
   // measured 2.97 (pelvis) and 2.82 (normals).
   std::array<double, 2> three_dof{};
   for (int k = 0; k < 2; ++k) {
-    AccuracyOptions o;
-    o.motion = "arm_raise";
-    o.seed = 2;
-    o.calibration_moves = true;
+    AccuracyOptions o = after_moves("arm_raise", 2);
     o.hinge_refine.basin_margin = 0.02;
     o.heading = k ? HeadingSource::mount_normals : HeadingSource::pelvis_sensor;
     const AccuracyResult r = run_accuracy(o);
@@ -160,10 +151,7 @@ TEST(Accuracy, TurnAfterCalibrationMovesKeepsTheKneeYaws) {
   // filters' heading drifting apart by ~3 deg during the turn, which the heading coupling
   // follows with its 1 s time constant (3 s: 2.58; docs/accuracy.md): knee 1.94 deg.
   for (uint64_t seed : {1, 4}) {
-    AccuracyOptions o;
-    o.motion = "turn";
-    o.seed = seed;
-    o.calibration_moves = true;
+    AccuracyOptions o = after_moves("turn", seed);
     const AccuracyResult r = run_accuracy(o);
     ASSERT_TRUE(r.calibrated) << r.calibration_message;
     record(r);
@@ -176,9 +164,7 @@ TEST(Accuracy, TurnAfterCalibrationMovesKeepsTheKneeYaws) {
 }
 
 TEST(Accuracy, ArmRaiseThroughNinetyDegreesWithRealisticSensors) {
-  AccuracyOptions o;
-  o.motion = "arm_raise";
-  o.calibration_moves = true;
+  AccuracyOptions o = after_moves("arm_raise");
   const AccuracyResult r = run_accuracy(o);
   ASSERT_TRUE(r.calibrated) << r.calibration_message;
   EXPECT_GT(r.frames, 1000);
@@ -199,9 +185,7 @@ TEST(Accuracy, StillUpperArmPinsTheForearmsYaw) {
   // direction terms pin it to first order: measured 0.04 deg, elbow 0.34. (The fit's noise
   // weighting alone also keeps it, 0.19 deg: the raises' residuals are far above the curls', so
   // the former fit, rate norms unweighted, is the one that fails.)
-  AccuracyOptions o;
-  o.motion = "arm_raise";
-  o.calibration_moves = true;
+  AccuracyOptions o = after_moves("arm_raise");
   o.sensor = SensorModelParams::ideal();
   const AccuracyResult r = run_accuracy(o);
   o.hinge_refine.direction_fraction = 0;

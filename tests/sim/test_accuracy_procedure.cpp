@@ -27,10 +27,7 @@ TEST(AccuracyProcedure, EveryMotionAfterTheCalibrationMovesMeetsTheTargets) {
   int met = 0, cells = 0;
   for (const char* motion : {"walk", "turn", "squat", "arm_raise", "reach", "sequence"}) {
     for (uint64_t seed = 1; seed <= 5; ++seed) {
-      AccuracyOptions o;
-      o.motion = motion;
-      o.seed = seed;
-      o.calibration_moves = true;
+      AccuracyOptions o = after_moves(motion, seed);
       const AccuracyResult r = run_accuracy(o);
       ASSERT_TRUE(r.calibrated) << motion << " seed " << seed << ": " << r.calibration_message;
       RecordProperty(
