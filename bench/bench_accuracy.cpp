@@ -204,6 +204,11 @@ int run_accuracy(int argc, char** argv) {
             "the sensors run for 22 s of walking and turning before the calibration stand")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
       .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
+      .option("relative-mag",
+              "relative magnetometer heading smoothing: on|off (default on, as the daemon)")
+      .option("relative-mag-param",
+              "RelativeMagHeadingOptions overrides, comma list of name=value "
+              "(tau_s, turn_deg, turn_memory_s, turn_tau_s)")
       .option("anchor",
               "filter heading anchored at the calibration: on|off (default on, as the daemon)")
       .option("consensus",
@@ -255,6 +260,7 @@ int run_accuracy(int argc, char** argv) {
   }
   if (args.has("no-refine")) base.hinge_refine.enabled = false;
   if (!on_off(args, "coupling", base.heading_coupling.enabled) ||
+      !on_off(args, "relative-mag", base.relative_mag_heading.enabled) ||
       !on_off(args, "anchor", base.anchor_heading) ||
       !on_off(args, "consensus", base.rig_consensus))
     return 2;
@@ -269,6 +275,13 @@ int run_accuracy(int argc, char** argv) {
                    {"disturbed_weight", &c.disturbed_weight}}))
     return 2;
   if (args.has("no-carry")) base.heading_coupling.carry_distal = false;
+  RelativeMagHeadingOptions& rm = base.relative_mag_heading;
+  if (!set_params(args.get_or("relative-mag-param", ""), "relative-mag-param",
+                  {{"tau_s", &rm.tau_s},
+                   {"turn_deg", &rm.turn_deg},
+                   {"turn_memory_s", &rm.turn_memory_s},
+                   {"turn_tau_s", &rm.turn_tau_s}}))
+    return 2;
   HingeRefineOptions& h = base.hinge_refine;
   double noise_weighting = h.noise_weighting ? 1 : 0;
   double block_min_samples = h.block_min_samples;

@@ -476,6 +476,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     k.str("file", c.calibration.file);
     k.boolean("refine_hinges", c.calibration.refine_hinges);
     k.boolean("heading_coupling", c.calibration.heading_coupling);
+    k.boolean("relative_mag_heading", c.calibration.relative_mag_heading);
     k.str("heading", c.calibration.heading, {"mount_normals", "pelvis_sensor", "mean_sensors"});
     k.finish();
   }
@@ -752,13 +753,15 @@ std::string config_to_toml(const Config& c) {
     root.insert("filter", std::move(f));
   }
   root.insert("body", body_to_toml(c.body));
-  root.insert("calibration", toml::table{{"pose", c.calibration.pose},
-                                         {"countdown_s", c.calibration.countdown_s},
-                                         {"capture_s", c.calibration.capture_s},
-                                         {"file", c.calibration.file},
-                                         {"refine_hinges", c.calibration.refine_hinges},
-                                         {"heading_coupling", c.calibration.heading_coupling},
-                                         {"heading", c.calibration.heading}});
+  root.insert("calibration",
+              toml::table{{"pose", c.calibration.pose},
+                          {"countdown_s", c.calibration.countdown_s},
+                          {"capture_s", c.calibration.capture_s},
+                          {"file", c.calibration.file},
+                          {"refine_hinges", c.calibration.refine_hinges},
+                          {"heading_coupling", c.calibration.heading_coupling},
+                          {"relative_mag_heading", c.calibration.relative_mag_heading},
+                          {"heading", c.calibration.heading}});
   toml::table outs;
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
                                   {"bind", c.outputs.json.bind},

@@ -30,6 +30,7 @@ SkeletonOptions skeleton_options(const Config& cfg) {
   o.stale_after_ns = static_cast<int64_t>(cfg.pipeline.stale_after_ms * 1e6);
   o.hinge_refine.enabled = cfg.calibration.refine_hinges;
   o.heading_coupling.enabled = cfg.calibration.heading_coupling;
+  o.relative_mag_heading.enabled = cfg.calibration.relative_mag_heading && cfg.filter.use_mag;
   return o;
 }
 
@@ -119,7 +120,7 @@ void RigEngine::on_sample(int i, const ImuSample& s) {
   const uint32_t flags = (f.at_rest() ? uint32_t{kSegAtRest} : 0u) |
                          (f.mag_disturbed() ? uint32_t{kSegMagDisturbed} : 0u) |
                          (f.mag_no_reference() ? uint32_t{kSegMagNoReference} : 0u);
-  skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags);
+  skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags, f.mag_heading_rad());
   if (calibrator_.capturing()) {
     calibrator_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
     if (calibrator_.done(s.t_host_ns)) {

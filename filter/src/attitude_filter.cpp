@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <numbers>
 #include "mocap/core/units.hpp"
@@ -747,6 +748,12 @@ double AttitudeFilter::heading_sigma_rad() const {
   const double since_mag_s = std::max(static_cast<double>(st_.t_gyr_ns - st_.t_mag_ns), 0.0) * 1e-9;
   const double sb2 = st_.bias_p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
   return std::sqrt(std::max(st_.delta_var_rad2 + (c_.heading_q_rad2_s + sb2) * since_mag_s, 0.0));
+}
+
+double AttitudeFilter::mag_heading_rad() const {
+  if (!st_.have_mag || !(heading_sigma_rad() <= kSettledHeadingSigmaDeg * kRadPerDeg))
+    return std::numeric_limits<double>::quiet_NaN();
+  return st_.delta_rad;
 }
 
 }  // namespace mocap

@@ -80,6 +80,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   SkeletonOptions sopt;
   sopt.hinge_refine = o.hinge_refine;
   sopt.heading_coupling = o.heading_coupling;
+  sopt.relative_mag_heading = o.relative_mag_heading;
   Skeleton skeleton(BodyModel(perf.dims()), default_joint_limits(), rig, sopt);
 
   const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
@@ -123,7 +124,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       } else if (r.calibrated) {
         uint32_t flags = f.at_rest() ? uint32_t{kSegAtRest} : 0u;
         if (f.mag_disturbed()) flags |= kSegMagDisturbed;
-        skeleton.set_sensor_orientation(seg, q, s.t_host_ns, flags);
+        if (f.mag_no_reference()) flags |= kSegMagNoReference;
+        skeleton.set_sensor_orientation(seg, q, s.t_host_ns, flags, f.mag_heading_rad());
       }
     }
     if (o.rig_consensus) consensus.step(t_ns, filters);

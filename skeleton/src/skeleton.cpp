@@ -17,6 +17,7 @@ Skeleton::Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping
       opt_(options),
       refiner_(rig, options.hinge_refine),
       coupling_(rig, options.heading_coupling),
+      rel_mag_(rig, options.relative_mag_heading),
       root_(model, options.root) {
   validate(limits_);
   q_es_.fill(Eigen::Quaterniond::Identity());
@@ -39,7 +40,7 @@ Skeleton::Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping
 }
 
 void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, int64_t t_ns,
-                                      uint32_t sensor_flags) {
+                                      uint32_t sensor_flags, double mag_heading_rad) {
   if (segment < 0 || segment >= kSegmentCount || !rig_.tracked(segment)) {
     ++rejected_;
     return;
@@ -49,7 +50,10 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
     ++rejected_;
     return;
   }
-  q_es_[segment] = Eigen::Quaterniond(q.coeffs() / n);
+  // The relative heading smoothing runs from the calibration on (which restarts it).
+  q_es_[segment] =
+      rel_mag_.apply(segment, Eigen::Quaterniond(q.coeffs() / n), t_ns,
+                     calib_.valid ? mag_heading_rad : std::numeric_limits<double>::quiet_NaN());
   t_in_ns_[segment] = t_ns;
   have_[segment] = true;
   in_flags_[segment] = sensor_flags & (kSegAtRest | kSegMagDisturbed | kSegMagNoReference);
@@ -59,6 +63,8 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
 void Skeleton::set_calibration(const Calibration& c) {
   calib_ = calib_base_ = c;
   ++calib_revision_;
+  // The calibration was taken from the sensors' own headings: the smoothing starts from them.
+  rel_mag_.reset();
   refiner_.reset();
   coupling_.reset();
 }

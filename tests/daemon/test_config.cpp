@@ -50,6 +50,7 @@ TEST(Config, EmptyFileGivesDefaults) {
   EXPECT_TRUE(c->sensors.empty());
   EXPECT_TRUE(c->calibration.refine_hinges);
   EXPECT_TRUE(c->calibration.heading_coupling);
+  EXPECT_TRUE(c->calibration.relative_mag_heading);
 }
 
 TEST(Config, HeadingCouplingCanBeTurnedOff) {
@@ -59,6 +60,11 @@ TEST(Config, HeadingCouplingCanBeTurnedOff) {
   EXPECT_FALSE(c->calibration.heading_coupling);
   auto bad = parse("[calibration]\nheading_coupling = 3\n", errs);
   EXPECT_FALSE(bad);
+  ConfigErrors errs2;
+  auto r = parse("[calibration]\nrelative_mag_heading = false\n", errs2);
+  ASSERT_TRUE(r) << errs2.to_string();
+  EXPECT_FALSE(r->calibration.relative_mag_heading);
+  EXPECT_TRUE(r->calibration.heading_coupling);
 }
 
 TEST(Config, CalibrationHeadingSourceAndSiteNormals) {

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -12,6 +14,8 @@
 #include "mocap/core/units.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/rig_engine.hpp"
+#include "mocap/sim/body_pose.hpp"
+#include "mocap/sim/motion.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/sim/sensor_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
@@ -183,6 +187,51 @@ TEST(DaemonCalibrationHeading, MountNormalsByDefaultAndSiteNormalsFromTheConfig)
   ASSERT_TRUE(pelvis.valid);
   EXPECT_EQ(pelvis.heading_source, HeadingSource::pelvis_sensor);
   EXPECT_GT(std::abs(pelvis.heading_deg - normals.heading_deg), 0.1);
+}
+
+// RMS wrist_l error (deg) of a squat after the calibration procedure, seed 4 (the wrist whose
+// hand and forearm magnetometers' hard-iron residuals drift apart as the arms rise), through the
+// real RigEngine; relative_mag_heading as given.
+double squat_wrist_rmse_deg(bool relative_mag_heading) {
+  ConfigErrors errs;
+  std::optional<Config> parsed = parse_config("", "<defaults>", {}, errs);
+  EXPECT_TRUE(parsed) << errs.to_string();
+  Config cfg = *parsed;
+  cfg.sensors = performer_sensors();
+  cfg.calibration.relative_mag_heading = relative_mag_heading;
+  sim::PerformerParams pp;
+  pp.motion = "calibrate+squat";
+  pp.seed = 4;
+  pp.loop = false;
+  sim::Performer perf(pp);
+  const double calib_end_s = perf.calibration_window_s().second;
+  const double eval_from_s = calib_end_s + sim::calibration_moves_s();
+  RigEngine engine(cfg);
+  EXPECT_EQ(engine.skeleton().options().relative_mag_heading.enabled, relative_mag_heading);
+  const int wrist = index(Segment::hand_l);
+  double sum_sq = 0;
+  int n = 0;
+  sim::TruthFrame truth;
+  drive(engine, perf, perf.track().period_s(), calib_end_s - 0.3 - cfg.calibration.capture_s,
+        [&](int64_t t_ns, const PoseFrame&) {
+          const double t_s = t_ns * 1e-9;
+          if (t_s < eval_from_s) return;
+          perf.truth_at(t_s, truth);
+          const double e = engine.skeleton().q_parent_segment()[wrist].angularDistance(
+              truth.q_parent_segment[wrist]);
+          sum_sq += e * e;
+          ++n;
+        });
+  EXPECT_GT(n, 500);
+  return n ? std::sqrt(sum_sq / n) / kRadPerDeg : 1e9;
+}
+
+TEST(DaemonRelativeMagHeading, WristFollowsTheGyrosThroughTheRigEngine) {
+  const double on = squat_wrist_rmse_deg(true), off = squat_wrist_rmse_deg(false);
+  std::printf("wrist_l RMSE with/without the smoothing: %.2f / %.2f deg\n", on, off);
+  // Measured: 0.92 deg with the smoothing, 2.97 without (the bench: 1.08 / 3.06).
+  EXPECT_LT(on, 2.0);
+  EXPECT_GT(off, on + 1.0);
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 // a sensor that starts beside a magnet and then leaves it, on synthetic streams with truth.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "mocap/filter/attitude_filter.hpp"
 #include "synth.hpp"
 
@@ -59,6 +61,39 @@ TEST(AttitudeStartup, NoMagnetometerMeansNoReferenceFlagOff) {
   }
   EXPECT_FALSE(f.mag_no_reference());
   EXPECT_FALSE(f.mag_disturbed());
+}
+
+TEST(AttitudeStartup, MagHeadingCorrectionOnceConverged) {
+  // mag_heading_rad(): the magnetometer's turn of the 6D orientation, NaN without a magnetometer
+  // and during the first moments of start-up (heading not converged yet).
+  SynthConfig c;
+  c.q0 = start_attitude();
+  c.duration_s = 5;
+  c.gyr_true = [](double t) -> Eigen::Vector3d { return Eigen::Vector3d(0, 0, 0.5 * std::sin(t)); };
+  const auto s = make_stream(c);
+  AttitudeFilter f, no_mag;
+  EXPECT_TRUE(std::isnan(f.mag_heading_rad()));
+  bool nan_at_first = false, finite_later = true;
+  for (const auto& smp : s.samples) {
+    f.update(smp);
+    ImuSample six = smp;
+    six.valid &= ~kFieldMag;
+    no_mag.update(six);
+    EXPECT_TRUE(std::isnan(no_mag.mag_heading_rad()));
+    const double t = smp.t_host_ns * 1e-9;
+    if (t < 0.05) nan_at_first |= std::isnan(f.mag_heading_rad());
+    if (t < 2) continue;
+    finite_later &= std::isfinite(f.mag_heading_rad());
+    const Eigen::Quaterniond turned =
+        Eigen::Quaterniond(Eigen::AngleAxisd(f.mag_heading_rad(), Eigen::Vector3d::UnitZ())) *
+        f.q_earth_sensor_6d();
+    EXPECT_LT(turned.angularDistance(f.q_earth_sensor()), 1e-9);
+  }
+  EXPECT_TRUE(nan_at_first);
+  EXPECT_TRUE(finite_later);
+  // The start attitude's heading (-1.1 rad) comes from the magnetometer (the 6D frame starts at
+  // the sensor's own heading).
+  EXPECT_GT(std::abs(f.mag_heading_rad()), 0.5);
 }
 
 // The sensor starts next to a magnet and moves around in its gradient (hand-like motion), so

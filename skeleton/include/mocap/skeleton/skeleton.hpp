@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
@@ -20,6 +21,7 @@
 #include "mocap/skeleton/hinge_calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
+#include "mocap/skeleton/relative_mag_heading.hpp"
 #include "mocap/skeleton/rig.hpp"
 #include "mocap/skeleton/root_motion.hpp"
 
@@ -46,6 +48,10 @@ struct SkeletonOptions {
   /// follows its parent's through the hinge constraint. Off by default here; the daemon and the
   /// accuracy benchmark set it from their configuration.
   HeadingCouplingOptions heading_coupling{};
+  /// Relative magnetometer heading smoothing (relative_mag_heading.hpp): joint rotations follow
+  /// the gyros in the short term. Off by default here; the daemon and the accuracy benchmark
+  /// set it from their configuration. Needs each sample's mag_heading_rad.
+  RelativeMagHeadingOptions relative_mag_heading{};
 };
 
 class Skeleton {
@@ -66,6 +72,8 @@ class Skeleton {
   const HingeAxisRefiner& hinge_refiner() const { return refiner_; }
   /// The heading coupling's state (per-hinge corrections).
   const HeadingCoupling& heading_coupling() const { return coupling_; }
+  /// The relative magnetometer heading smoothing's state (per-segment corrections).
+  const RelativeMagHeading& relative_mag_heading() const { return rel_mag_; }
   /// Heading-only reset from the latest sensor orientations (the person stands facing forward):
   /// every segment takes the pelvis's heading, or `target_heading_deg` when given (0 = face +x).
   void reset_heading(const double* target_heading_deg = nullptr);
@@ -76,8 +84,12 @@ class Skeleton {
   /// Newest orientation of the sensor on `segment` (earth frame). Non-finite or zero quaternions
   /// are rejected (counted in rejected_samples()). sensor_flags: SegmentFlag bits reported by
   /// the sensor's filter (kSegAtRest, kSegMagDisturbed), passed through to the frame.
+  /// mag_heading_rad: the sensor filter's magnetometer heading correction
+  /// (AttitudeFilter::mag_heading_rad()) for the relative smoothing; NaN = not known (the
+  /// orientation is used as given).
   void set_sensor_orientation(int segment, const Eigen::Quaterniond& q_earth_sensor, int64_t t_ns,
-                              uint32_t sensor_flags = 0);
+                              uint32_t sensor_flags = 0,
+                              double mag_heading_rad = std::numeric_limits<double>::quiet_NaN());
 
   /// Solves the posture at the newest sample time. Fills every skeleton field of `out`
   /// (frame, t_ns, calibrated flag, orientations, positions, joint rotations, violations,
@@ -113,6 +125,7 @@ class Skeleton {
   uint64_t calib_revision_ = 0;
   HingeAxisRefiner refiner_;
   HeadingCoupling coupling_;
+  RelativeMagHeading rel_mag_;
   RootMotion root_;
 
   // Inputs.
