@@ -19,7 +19,7 @@
 // its heading by a different amount (a 180 deg turn: 1-3 deg between two sensors), which only
 // the magnetometers see, and the filters absorb it over their own time constant after the turn.
 // So each segment's rotation about the earth vertical is summed into a turn budget that decays
-// with turn_memory_s (the filters' heading time constant); while it holds turn_rad or more, the
+// with turn_memory_s (the filters' heading time constant); while it holds turn_deg or more, the
 // relative correction follows the filters' with turn_tau_s (a fraction of that below).
 //
 // Pure, deterministic, allocation-free; one instance per skeleton, reset with the calibration

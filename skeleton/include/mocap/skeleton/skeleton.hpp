@@ -85,8 +85,8 @@ class Skeleton {
   /// are rejected (counted in rejected_samples()). sensor_flags: SegmentFlag bits reported by
   /// the sensor's filter (kSegAtRest, kSegMagDisturbed), passed through to the frame.
   /// mag_heading_rad: the sensor filter's magnetometer heading correction
-  /// (AttitudeFilter::mag_heading_rad()) for the relative smoothing; NaN = not known (the
-  /// orientation is used as given).
+  /// (AttitudeFilter::mag_heading_rad()) for the relative smoothing, which runs from a
+  /// calibration on; NaN = not known (the orientation is used as given).
   void set_sensor_orientation(int segment, const Eigen::Quaterniond& q_earth_sensor, int64_t t_ns,
                               uint32_t sensor_flags = 0,
                               double mag_heading_rad = std::numeric_limits<double>::quiet_NaN());
