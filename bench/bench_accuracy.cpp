@@ -200,6 +200,9 @@ int run_accuracy(int argc, char** argv) {
       .flag(
           "calibration-moves",
           "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
+      .flag("gyro-scale-calibration",
+            "calibrate each sensor's gyro scale first (table spins, as a user does once per "
+            "sensor) and divide it out")
       .flag("warmup",
             "the sensors run for 22 s of walking and turning before the calibration stand")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
@@ -259,6 +262,7 @@ int run_accuracy(int argc, char** argv) {
     return 2;
   }
   if (args.has("no-refine")) base.hinge_refine.enabled = false;
+  if (args.has("gyro-scale-calibration")) base.gyro_scale_calibration = true;
   if (!on_off(args, "coupling", base.heading_coupling.enabled) ||
       !on_off(args, "relative-mag", base.relative_mag_heading.enabled) ||
       !on_off(args, "anchor", base.anchor_heading) ||

@@ -176,21 +176,42 @@ class TableReader {
     out = *n->value<bool>();
   }
 
-  /// A direction: an array of three finite numbers, not all zero.
-  void direction(std::string_view key, std::optional<std::array<double, 3>>& out) {
-    const toml::node* n = node(key);
-    if (!n) return;
+  /// An array of three finite numbers (reported and false otherwise).
+  bool three_numbers(const toml::node* n, std::string_view key, std::array<double, 3>& v) {
     const toml::array* a = n->as_array();
-    std::array<double, 3> v{};
     bool ok = a && a->size() == 3;
     for (size_t i = 0; ok && i < 3; ++i) {
       const auto x = (*a)[i].value<double>();
       ok = (*a)[i].is_number() && x && std::isfinite(*x);
       if (ok) v[i] = *x;
     }
-    if (!ok) return type_error(n, key, "an array of three numbers [x, y, z]");
+    if (!ok) type_error(n, key, "an array of three numbers [x, y, z]");
+    return ok;
+  }
+
+  /// A direction: an array of three finite numbers, not all zero.
+  void direction(std::string_view key, std::optional<std::array<double, 3>>& out) {
+    const toml::node* n = node(key);
+    std::array<double, 3> v{};
+    if (!n || !three_numbers(n, key, v)) return;
     if (std::hypot(v[0], v[1], v[2]) < 1e-6)
       return ctx_.add(n, join(path_, key), "is the zero vector (needs a direction)");
+    out = v;
+  }
+
+  /// Three numbers, each within [lo, hi].
+  void ranged_triple(std::string_view key, std::optional<std::array<double, 3>>& out, double lo,
+                     double hi) {
+    const toml::node* n = node(key);
+    std::array<double, 3> v{};
+    if (!n || !three_numbers(n, key, v)) return;
+    for (double x : v) {
+      if (x < lo || x > hi) {
+        std::ostringstream m;
+        m << x << " is out of range [" << lo << ", " << hi << "]";
+        return ctx_.add(n, join(path_, key), m.str());
+      }
+    }
     out = v;
   }
 
@@ -301,6 +322,7 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
   r.str("segment", s.segment);
   r.str("axis_remap", s.axis_remap);
   r.direction("site_normal", s.site_normal);
+  r.ranged_triple("gyr_scale", s.gyr_scale, 0.8, 1.2);
   r.str("log_level", s.log_level, {"trace", "debug", "info", "warn", "error", "off"});
   if (const toml::table* opts = r.table("options")) {
     for (const auto& [k, v] : *opts) {
@@ -527,6 +549,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     d.num("rate_hz", c.demo.rate_hz, 1, 2000);
     d.str("motion", c.demo.motion);
     d.integer("seed", c.demo.seed, 0, INT64_MAX);
+    d.boolean("gyro_scale_calibration", c.demo.gyro_scale_calibration);
     d.finish();
   }
   if (const toml::node* sn = r.node("sensor")) {
@@ -782,7 +805,8 @@ std::string config_to_toml(const Config& c) {
                                   {"protocol", c.demo.protocol},
                                   {"rate_hz", c.demo.rate_hz},
                                   {"motion", c.demo.motion},
-                                  {"seed", static_cast<int64_t>(c.demo.seed)}});
+                                  {"seed", static_cast<int64_t>(c.demo.seed)},
+                                  {"gyro_scale_calibration", c.demo.gyro_scale_calibration}});
   toml::array sensors;
   for (const auto& s : c.sensors) {
     toml::table t{{"name", s.name},          {"driver", s.driver},   {"baud", s.baud},
@@ -792,6 +816,8 @@ std::string config_to_toml(const Config& c) {
     if (s.site_normal)
       t.insert("site_normal",
                toml::array{(*s.site_normal)[0], (*s.site_normal)[1], (*s.site_normal)[2]});
+    if (s.gyr_scale)
+      t.insert("gyr_scale", toml::array{(*s.gyr_scale)[0], (*s.gyr_scale)[1], (*s.gyr_scale)[2]});
     if (s.vid >= 0) {
       t.insert("vid", s.vid);
       t.insert("pid", s.pid);

@@ -1,7 +1,8 @@
 // The demo's simulated sensors: Performer -> protocol encoder -> pty (device path), or
 // Performer -> pipeline (direct path), on one thread paced by the wall clock. The demo also
 // requests an N-pose calibration (as `mocapctl calibrate npose` does) during each of the
-// performer's N-pose stands, so the avatar calibrates itself at start and on every loop.
+// performer's N-pose stands, so the avatar calibrates itself at start and on every loop. Its
+// sensors come with their one-time gyro scale calibration (demo.gyro_scale_calibration).
 #include "mocap/daemon/demo.hpp"
 
 #include <poll.h>
@@ -15,8 +16,10 @@
 
 #include "mocap/core/time.hpp"
 #include "mocap/drivers/sim_encoder.hpp"
+#include "mocap/filter/gyro_scale.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/sim/sensor_model.hpp"
+#include "mocap/sim/table_spin.hpp"
 
 namespace mocap::daemon {
 
@@ -48,6 +51,15 @@ class DemoService final : public Service {
       s.name = std::string(sim::Performer::sensor_name(i));
       s.segment = s.name;
       s.rate_hz = cfg.demo.rate_hz;
+      if (cfg.demo.gyro_scale_calibration) {
+        // What `mocap gyro-scale` measures on the sensor's table spins, as a user does once.
+        const Eigen::Vector3d g =
+            filt::estimate_gyro_scale(sim::table_spin_samples(performer_->sensor_errors(i),
+                                                              sim::MagneticFieldParams{},
+                                                              s.rate_hz))
+                .scale();
+        s.gyr_scale = std::array<double, 3>{g.x(), g.y(), g.z()};
+      }
       if (direct_) {
         s.driver = "direct";
         s.port = "demo";

@@ -31,6 +31,9 @@ SkeletonOptions skeleton_options(const Config& cfg) {
   o.hinge_refine.enabled = cfg.calibration.refine_hinges;
   o.heading_coupling.enabled = cfg.calibration.heading_coupling;
   o.relative_mag_heading.enabled = cfg.calibration.relative_mag_heading && cfg.filter.use_mag;
+  for (const auto& s : cfg.sensors)
+    if (auto seg = segment_from_name(s.segment); seg && s.gyr_scale)
+      o.relative_mag_heading.gyro_scale_calibrated[index(*seg)] = true;
   return o;
 }
 
@@ -84,6 +87,8 @@ RigEngine::RigEngine(const Config& cfg, Logger* log)
   for (const auto& s : cfg.sensors) {
     auto seg = segment_from_name(s.segment);
     segment_of_.push_back(seg ? index(*seg) : -1);
+    const auto& g = s.gyr_scale;
+    gyr_scale_.push_back(g ? Eigen::Vector3d((*g)[0], (*g)[1], (*g)[2]) : Eigen::Vector3d::Ones());
   }
   const std::string& file = cfg.calibration.file;
   if (!file.empty() && std::filesystem::exists(file)) {
@@ -100,8 +105,11 @@ void RigEngine::flush_calibration_file() {
   if (saver_) saver_->flush();
 }
 
-void RigEngine::on_sample(int i, const ImuSample& s) {
+void RigEngine::on_sample(int i, const ImuSample& in) {
   AttitudeFilter& f = filters_[i];
+  // The sensor's gyro scale from its table-spin calibration (1 when uncalibrated).
+  ImuSample s = in;
+  s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(gyr_scale_[i]);
   f.update(s);
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
   // Every sensor of the body sees the same earth field: a reference that differs from the

@@ -8,9 +8,11 @@
 #include "mocap/core/units.hpp"
 #include "mocap/filter/attitude_filter.hpp"
 #include "mocap/filter/filter_param_names.hpp"
+#include "mocap/filter/gyro_scale.hpp"
 #include "mocap/filter/rig_field_consensus.hpp"
 #include "mocap/sim/motion.hpp"
 #include "mocap/sim/performer.hpp"
+#include "mocap/sim/table_spin.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
@@ -65,6 +67,15 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       throw std::invalid_argument("accuracy: filter parameter '" + a + "': " + err);
   }
   std::vector<AttitudeFilter> filters(Performer::kSensorCount, AttitudeFilter(fp));
+  std::array<Eigen::Vector3d, Performer::kSensorCount> gyr_scale;
+  gyr_scale.fill(Eigen::Vector3d::Ones());
+  if (o.gyro_scale_calibration) {
+    for (int id = 0; id < Performer::kSensorCount; ++id)
+      gyr_scale[id] =
+          filt::estimate_gyro_scale(
+              table_spin_samples(perf.sensor_errors(id), MagneticFieldParams{}, o.rate_hz))
+              .scale();
+  }
   filt::RigFieldConsensus consensus(filters.size());
   CalibratorOptions copt;
   copt.capture_s = o.capture_s;
@@ -81,6 +92,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   sopt.hinge_refine = o.hinge_refine;
   sopt.heading_coupling = o.heading_coupling;
   sopt.relative_mag_heading = o.relative_mag_heading;
+  sopt.relative_mag_heading.gyro_scale_calibrated.fill(o.gyro_scale_calibration);
   Skeleton skeleton(BodyModel(perf.dims()), default_joint_limits(), rig, sopt);
 
   const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
@@ -114,8 +126,9 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     const int64_t t_ns = to_ns(k * frame_s);
     samples.clear();
     perf.step_to(t_ns, samples);
-    for (const ImuSample& s : samples) {
+    for (ImuSample& s : samples) {
       AttitudeFilter& f = filters[s.sensor_id];
+      s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(gyr_scale[s.sensor_id]);
       f.update(s);
       const int seg = index(Performer::sensor_segment(s.sensor_id));
       const Eigen::Quaterniond q = f.q_earth_sensor();

@@ -58,7 +58,8 @@ Eigen::Quaterniond RelativeMagHeading::apply(int segment, const Eigen::Quaternio
     const double turn = std::abs(step.angle() * step.axis().z());
     double& budget = turn_rad_[segment];
     budget = budget * std::exp(-dt_s / opt_.turn_memory_s) + turn;
-    const double turning = std::min(1.0, budget / (opt_.turn_deg * kDegToRad));
+    const bool calibrated = opt_.gyro_scale_calibrated[segment] && opt_.gyro_scale_calibrated[ref_];
+    const double turning = calibrated ? 0.0 : std::min(1.0, budget / (opt_.turn_deg * kDegToRad));
     const double k = std::min(1.0, dt_s / opt_.tau_s + turning * dt_s / opt_.turn_tau_s);
     lp += k * std::remainder(rel - lp, 2 * M_PI);
   }

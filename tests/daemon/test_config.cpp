@@ -35,6 +35,7 @@ pid = 0x0300
 segment = "thigh_l"
 axis_remap = "-y,x,z"
 site_normal = [0.0, 1.0, 0.0]
+gyr_scale = [1.004, 0.995, 1.0]
 [sensor.options]
 quat_order = "wxyz"
 )";
@@ -92,6 +93,24 @@ TEST(Config, CalibrationHeadingSourceAndSiteNormals) {
     EXPECT_FALSE(parse(rig, e2)) << bad;
     EXPECT_NE(e2.to_string().find("rig.toml:18:15: sensor[1].site_normal"), std::string::npos)
         << e2.to_string();
+  }
+}
+
+TEST(Config, GyroScaleIsOptionalAndWithinTwentyPercent) {
+  ConfigErrors errs;
+  auto c = parse(kRig, errs);
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_FALSE(c->sensors[0].gyr_scale);  // uncalibrated
+  ASSERT_TRUE(c->sensors[1].gyr_scale);
+  EXPECT_DOUBLE_EQ((*c->sensors[1].gyr_scale)[0], 1.004);
+  EXPECT_DOUBLE_EQ((*c->sensors[1].gyr_scale)[1], 0.995);
+  for (const char* bad : {"[1.0, 1.3, 1.0]", "[1, 1]", "[0, 1, 1]", "1.0"}) {
+    std::string rig = kRig;
+    rig.replace(rig.find("[1.004, 0.995, 1.0]"), 19, bad);
+    ConfigErrors e;
+    EXPECT_FALSE(parse(rig, e)) << bad;
+    EXPECT_NE(e.to_string().find("rig.toml:19:13: sensor[1].gyr_scale"), std::string::npos)
+        << e.to_string();
   }
 }
 
@@ -224,6 +243,8 @@ TEST(Config, PrintedConfigParsesBackIdentically) {
   EXPECT_EQ(again.substr(again.find('\n')), printed.substr(printed.find('\n')));
   EXPECT_EQ(c2->sensors[1].axis_remap, "-y,x,z");
   EXPECT_EQ(c2->sensors[1].site_normal, c->sensors[1].site_normal);
+  EXPECT_EQ(c2->sensors[1].gyr_scale, c->sensors[1].gyr_scale);
+  EXPECT_FALSE(c2->sensors[0].gyr_scale);
 }
 
 TEST(Config, ExampleRigsAreValid) {

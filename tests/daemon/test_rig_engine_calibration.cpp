@@ -14,10 +14,12 @@
 #include "mocap/core/units.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/rig_engine.hpp"
+#include "mocap/filter/gyro_scale.hpp"
 #include "mocap/sim/body_pose.hpp"
 #include "mocap/sim/motion.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/sim/sensor_model.hpp"
+#include "mocap/sim/table_spin.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/sensor_sites.hpp"
 
@@ -189,26 +191,26 @@ TEST(DaemonCalibrationHeading, MountNormalsByDefaultAndSiteNormalsFromTheConfig)
   EXPECT_GT(std::abs(pelvis.heading_deg - normals.heading_deg), 0.1);
 }
 
-// RMS wrist_l error (deg) of a squat after the calibration procedure, seed 4 (the wrist whose
-// hand and forearm magnetometers' hard-iron residuals drift apart as the arms rise), through the
-// real RigEngine; relative_mag_heading as given.
-double squat_wrist_rmse_deg(bool relative_mag_heading) {
+// RMS error (deg) of one joint (the rotation of `joint` relative to its parent) after the
+// calibration procedure of `motion`, through the real RigEngine with the default config and the
+// performer's sensors; `setup` adjusts the config before the engine is built.
+template <typename Setup>
+double joint_rmse_deg(const char* motion, uint64_t seed, Segment joint, Setup setup) {
   ConfigErrors errs;
   std::optional<Config> parsed = parse_config("", "<defaults>", {}, errs);
   EXPECT_TRUE(parsed) << errs.to_string();
   Config cfg = *parsed;
   cfg.sensors = performer_sensors();
-  cfg.calibration.relative_mag_heading = relative_mag_heading;
   sim::PerformerParams pp;
-  pp.motion = "calibrate+squat";
-  pp.seed = 4;
+  pp.motion = std::string("calibrate+") + motion;
+  pp.seed = seed;
   pp.loop = false;
   sim::Performer perf(pp);
+  setup(cfg, perf);
   const double calib_end_s = perf.calibration_window_s().second;
   const double eval_from_s = calib_end_s + sim::calibration_moves_s();
   RigEngine engine(cfg);
-  EXPECT_EQ(engine.skeleton().options().relative_mag_heading.enabled, relative_mag_heading);
-  const int wrist = index(Segment::hand_l);
+  const int j = index(joint);
   double sum_sq = 0;
   int n = 0;
   sim::TruthFrame truth;
@@ -217,13 +219,21 @@ double squat_wrist_rmse_deg(bool relative_mag_heading) {
           const double t_s = t_ns * 1e-9;
           if (t_s < eval_from_s) return;
           perf.truth_at(t_s, truth);
-          const double e = engine.skeleton().q_parent_segment()[wrist].angularDistance(
-              truth.q_parent_segment[wrist]);
+          const double e =
+              engine.skeleton().q_parent_segment()[j].angularDistance(truth.q_parent_segment[j]);
           sum_sq += e * e;
           ++n;
         });
   EXPECT_GT(n, 500);
   return n ? std::sqrt(sum_sq / n) / kRadPerDeg : 1e9;
+}
+
+// RMS wrist_l error of a squat, seed 4 (the wrist whose hand and forearm magnetometers'
+// hard-iron residuals drift apart as the arms rise); relative_mag_heading as given.
+double squat_wrist_rmse_deg(bool relative_mag_heading) {
+  return joint_rmse_deg("squat", 4, Segment::hand_l, [&](Config& cfg, sim::Performer&) {
+    cfg.calibration.relative_mag_heading = relative_mag_heading;
+  });
 }
 
 TEST(DaemonRelativeMagHeading, WristFollowsTheGyrosThroughTheRigEngine) {
@@ -232,6 +242,29 @@ TEST(DaemonRelativeMagHeading, WristFollowsTheGyrosThroughTheRigEngine) {
   // Measured: 0.92 deg with the smoothing, 2.97 without (the bench: 1.08 / 3.06).
   EXPECT_LT(on, 2.0);
   EXPECT_GT(off, on + 1.0);
+}
+
+// Each sensor's gyr_scale from its one-time table-spin calibration (filt::estimate_gyro_scale on
+// the virtual sensor's spins) reaches the filters and the skeleton: the left hip after the turn
+// motion's 180 deg turns (seed 2, the closest cell of the accuracy grid), where the gyros' scale
+// errors turn the thigh's and the pelvis's headings apart.
+TEST(DaemonGyroScale, TableSpinCalibrationKeepsTheHipThroughTurns) {
+  const auto hip = [](bool calibrated) {
+    return joint_rmse_deg("turn", 2, Segment::thigh_l, [&](Config& cfg, sim::Performer& perf) {
+      if (!calibrated) return;
+      for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
+        const Eigen::Vector3d g =
+            filt::estimate_gyro_scale(
+                sim::table_spin_samples(perf.sensor_errors(i), sim::MagneticFieldParams{}, 100))
+                .scale();
+        cfg.sensors[i].gyr_scale = std::array<double, 3>{g.x(), g.y(), g.z()};
+      }
+    });
+  };
+  const double on = hip(true), off = hip(false);
+  std::printf("hip_l RMSE with/without the gyro scale calibration: %.2f / %.2f deg\n", on, off);
+  EXPECT_LT(on, off - 0.5);
+  EXPECT_LT(on, 2.5);
 }
 
 }  // namespace

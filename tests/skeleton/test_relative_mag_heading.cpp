@@ -2,8 +2,8 @@
 // outputs: a sensor's true orientation, turned by its filter's magnetometer correction delta
 // (q = Rz(delta) q_true when delta is the error). A short wobble of one sensor's correction
 // relative to the pelvis sensor's is taken out of its heading, a lasting one is followed over
-// tau_s, after a turn about the vertical over turn_tau_s; the pelvis and a common correction of
-// every sensor pass unchanged.
+// tau_s, after a turn about the vertical over turn_tau_s (unless both gyro scales are
+// calibrated); the pelvis and a common correction of every sensor pass unchanged.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -109,6 +109,24 @@ TEST(RelativeMagHeading, AfterATurnTheMagnetometersAreFollowedFast) {
   const double e_turning = run(turning, 4, 0.01, step, zero, w);
   EXPECT_LT(e_still, 4 * (1 - std::exp(-3.0 / 20)) + 0.05);  // 3 s of tau_s = 20 s: 0.56
   EXPECT_GT(e_turning, 3.0);
+}
+
+TEST(RelativeMagHeading, CalibratedGyroScalesKeepTauAfterATurn) {
+  // With both sensors' gyro scales calibrated a turn does not turn their headings apart: the
+  // relative correction keeps tau_s. One calibrated sensor is not enough.
+  const auto zero = [](double) { return 0.0; };
+  const auto step = [](double t) { return t >= 1 ? 4 * kDegToRad : 0.0; };
+  const double w = 60 * kDegToRad;
+  RelativeMagHeadingOptions o;
+  o.enabled = true;
+  o.gyro_scale_calibrated[kHand] = o.gyro_scale_calibrated[kPelvis] = true;
+  RelativeMagHeading both(RigMapping::full(), o);
+  o.gyro_scale_calibrated[kPelvis] = false;
+  RelativeMagHeading hand_only(RigMapping::full(), o);
+  run(both, 0, 4, step, zero, w);
+  run(hand_only, 0, 4, step, zero, w);
+  EXPECT_LT(run(both, 4, 0.01, step, zero, w), 4 * (1 - std::exp(-3.0 / 20)) + 0.05);
+  EXPECT_GT(run(hand_only, 4, 0.01, step, zero, w), 3.0);
 }
 
 TEST(RelativeMagHeading, UnknownCorrectionRestarts) {

@@ -22,6 +22,8 @@ constexpr Command kCommands[] = {
     {"devices", mocap::cmd::run_devices, "list connected devices that a driver supports"},
     {"bench", mocap::cmd::run_bench, "benchmarks (filter, skeleton, latency, capacity, ...)"},
     {"evaluate", mocap::cmd::run_evaluate, "score attitude filters on the BROAD trials"},
+    {"gyro-scale", mocap::cmd::run_gyro_scale,
+     "each sensor's gyro scale from table spins (a one-time calibration)"},
 };
 
 void usage(FILE* out) {

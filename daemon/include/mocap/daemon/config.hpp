@@ -34,6 +34,10 @@ struct SensorConfig {
   /// sensor's z axis (after axis_remap) lies along it. Used by calibration.heading =
   /// "mount_normals".
   std::optional<std::array<double, 3>> site_normal;
+  /// Gyro scale per axis (after axis_remap), from the one-time table-spin calibration (`mocap
+  /// gyro-scale`): the gyro reads scale * rate, so samples are divided by it. Absent:
+  /// uncalibrated (the skeleton then expects the gyros' scale errors after turns).
+  std::optional<std::array<double, 3>> gyr_scale;
   std::string log_level = "info";
   std::map<std::string, std::string> options;  ///< protocol options
 };
@@ -137,6 +141,9 @@ struct DemoConfig {
   /// sequence.
   std::string motion = "calibrate+sequence";
   uint64_t seed = 1;
+  /// The virtual sensors come with their one-time gyro scale calibration (`mocap gyro-scale`,
+  /// done on their virtual table spins): each sensor's gyr_scale is set.
+  bool gyro_scale_calibration = true;
 };
 
 struct Config {

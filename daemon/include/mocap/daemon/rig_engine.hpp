@@ -55,6 +55,7 @@ class RigEngine final : public PoseEngine {
   std::vector<AttitudeFilter> filters_;
   filt::RigFieldConsensus consensus_;  ///< reference field shared by the rig's sensors
   std::vector<int> segment_of_;
+  std::vector<Eigen::Vector3d> gyr_scale_;  ///< per sensor: [[sensor]] gyr_scale, or 1
   Skeleton skeleton_;
   Calibrator calibrator_;
   int64_t newest_t_ns_ = 0;

@@ -57,6 +57,10 @@ struct AccuracyOptions {
   /// Rig consensus of the reference field (filt::RigFieldConsensus, as the daemon): a sensor
   /// whose reference field differs from the median of the others' gets the median.
   bool rig_consensus = true;
+  /// Each sensor's gyro scale calibrated first (filt::estimate_gyro_scale on the sensor's table
+  /// spins, table_spin.hpp, as a user does once per sensor; `[[sensor]] gyr_scale` in the
+  /// daemon) and divided out of its samples. Off: the gyros' drawn scale errors stay.
+  bool gyro_scale_calibration = false;
 };
 
 struct AccuracyResult {

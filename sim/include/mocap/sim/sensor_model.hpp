@@ -108,6 +108,8 @@ class SensorErrorModel {
   const Eigen::Vector3d& gyr_bias_rad_s() const { return gyr_bias_rad_s_; }
   /// The drawn hard-iron residual (sensor frame, uT): truth for filter diagnostics.
   const Eigen::Vector3d& mag_offset_uT() const { return mag_offset_uT_; }
+  /// The drawn gyro scale per axis (gyro reads scale * w + bias): truth for calibration tests.
+  const Eigen::Vector3d& gyr_scale() const { return gyr_scale_; }
 
  private:
   Eigen::Vector3d noise3(double sigma);

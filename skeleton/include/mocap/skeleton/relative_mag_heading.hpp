@@ -20,7 +20,10 @@
 // the magnetometers see, and the filters absorb it over their own time constant after the turn.
 // So each segment's rotation about the earth vertical is summed into a turn budget that decays
 // with turn_memory_s (the filters' heading time constant); while it holds turn_deg or more, the
-// relative correction follows the filters' with turn_tau_s (a fraction of that below).
+// relative correction follows the filters' with turn_tau_s (a fraction of that below). Sensors
+// whose gyro scale is calibrated (filter/gyro_scale.hpp) do not turn apart: the turn rule is
+// skipped for a segment when both its sensor and the reference's are (it would only let the
+// magnetometers' errors back in).
 //
 // Pure, deterministic, allocation-free; one instance per skeleton, reset with the calibration
 // (which was taken from the sensors' own headings).
@@ -41,6 +44,8 @@ struct RelativeMagHeadingOptions {
   double turn_deg = 90.0;      ///< turning (about the vertical) that switches to turn_tau_s
   double turn_memory_s = 9.0;  ///< decay of the turn budget
   double turn_tau_s = 2.0;     ///< time constant after turning
+  /// Segments whose sensor's gyro scale is calibrated (no turn rule between two of them).
+  std::array<bool, kSegmentCount> gyro_scale_calibrated{};
 };
 
 class RelativeMagHeading {
