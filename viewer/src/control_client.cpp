@@ -63,8 +63,8 @@ std::string calibration_prompt(const std::string& status_reply_json) {
   return "CALIBRATION MOVES: " + what + todo;
 }
 
-std::string fetch_calibration_prompt(const std::string& socket_path) {
-  const ControlReply r = send_control_request(socket_path, status_request(), 100);
+std::string fetch_calibration_prompt(const std::string& socket_path, int timeout_ms) {
+  const ControlReply r = send_control_request(socket_path, status_request(), timeout_ms);
   return r.ok ? calibration_prompt(r.json) : std::string();
 }
 

@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "mocap/viewer/control_client.hpp"
+#include "mocap/viewer/control_worker.hpp"
 #include "mocap/viewer/gl_util.hpp"
 #include "viewer_options.hpp"
 
@@ -13,15 +14,15 @@ struct App {
   const ViewerOptions* options = nullptr;
   View* view = nullptr;
   PoseSource* source = nullptr;
-  std::string control_socket;
+  ControlWorker* control_worker = nullptr;
   bool paused = false;
   bool dragging = false, panning = false;
   double last_x = 0, last_y = 0;
 
+  /// Sent off the render thread; the outcome replaces "...: SENT" when the daemon answers.
   void control(const std::string& request, const char* what) {
-    const ControlReply r = send_control_request(control_socket, request);
-    view->hud.message = std::string(what) + ": " + (r.ok ? "OK" : "FAILED") +
-                        (r.message.empty() || r.message == "ok" ? "" : " (" + r.message + ")");
+    view->hud.message = std::string(what) + ": SENT";
+    control_worker->request(request, what);
   }
 };
 
@@ -125,12 +126,16 @@ int run_window(const ViewerOptions& o) {
                                    : body_dimensions_from_height(o.height_m));
     view.settings = o.settings;
     view.camera = OrbitCamera::framing(o.avatars);
+    // A live daemon: what its calibration still needs (the moves, or a refusal's reason), asked
+    // once a second by the worker.
+    ControlWorker control(
+        o.control_socket.empty() ? default_control_socket_path() : o.control_socket,
+        !source->seekable());
     App app;
     app.options = &o;
     app.view = &view;
     app.source = source.get();
-    app.control_socket =
-        o.control_socket.empty() ? default_control_socket_path() : o.control_socket;
+    app.control_worker = &control;
     glfwSetWindowUserPointer(window, &app);
     glfwSetKeyCallback(window, on_key);
     glfwSetMouseButtonCallback(window, on_button);
@@ -140,16 +145,12 @@ int run_window(const ViewerOptions& o) {
     using clock = std::chrono::steady_clock;
     const auto start = clock::now();
     auto fps_window_start = start;
-    auto status_asked = start - std::chrono::seconds(1);
     int fps_frames = 0;
     while (!glfwWindowShouldClose(window)) {
       glfwPollEvents();
       const auto now = clock::now();
-      if (!source->seekable() && now - status_asked >= std::chrono::seconds(1)) {
-        // A live daemon: what its calibration still needs (the moves, or a refusal's reason).
-        status_asked = now;
-        view.hud.calibration_prompt = fetch_calibration_prompt(app.control_socket);
-      }
+      view.hud.calibration_prompt = control.prompt();
+      if (auto m = control.take_message()) view.hud.message = std::move(*m);
       source->poll(std::chrono::duration<double>(now - start).count(), view.frames);
       view.hud.source = source->status();
       if (++fps_frames, now - fps_window_start > std::chrono::milliseconds(500)) {

@@ -29,9 +29,9 @@ struct ControlReply {
 /// CURL THE ELBOWS  KNEE_L 112/150 DEG ..."); "" when there is nothing to say. Upper case (the
 /// HUD's font). Never throws.
 std::string calibration_prompt(const std::string& status_reply_json);
-/// Asks the daemon for its status (100 ms at most) and returns calibration_prompt() of it; ""
-/// when no daemon answers.
-std::string fetch_calibration_prompt(const std::string& socket_path);
+/// Asks the daemon for its status (timeout_ms at most) and returns calibration_prompt() of it;
+/// "" when no daemon answers.
+std::string fetch_calibration_prompt(const std::string& socket_path, int timeout_ms = 100);
 
 /// Connects, sends `request` plus '\n', waits up to `timeout_ms` for one reply line. A reply is
 /// ok if it is a JSON object with "ok": true. Never throws.
