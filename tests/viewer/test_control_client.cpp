@@ -7,6 +7,7 @@
 #include <cstring>
 #include <thread>
 
+#include "../common/unix_listener.hpp"
 #include "mocap/viewer/control_client.hpp"
 
 namespace mocap::viewer {
@@ -17,13 +18,7 @@ class OneShotServer {
  public:
   explicit OneShotServer(std::string reply) : reply_(std::move(reply)) {
     path_ = "/tmp/mocap-viewer-ctl-" + std::to_string(getpid()) + ".sock";
-    unlink(path_.c_str());
-    fd_ = socket(AF_UNIX, SOCK_STREAM, 0);
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::strcpy(addr.sun_path, path_.c_str());
-    EXPECT_EQ(bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-    EXPECT_EQ(listen(fd_, 1), 0);
+    fd_ = test::listen_unix(path_, 1);
     thread_ = std::thread([this] {
       const int c = accept(fd_, nullptr, nullptr);
       if (c < 0) return;

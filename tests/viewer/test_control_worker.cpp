@@ -14,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "../common/unix_listener.hpp"
 #include "mocap/viewer/control_worker.hpp"
 
 namespace mocap::viewer {
@@ -25,13 +26,7 @@ class GatedServer {
  public:
   explicit GatedServer(std::string reply) : reply_(std::move(reply)) {
     path_ = "/tmp/mocap-viewer-worker-" + std::to_string(getpid()) + ".sock";
-    unlink(path_.c_str());
-    fd_ = socket(AF_UNIX, SOCK_STREAM, 0);
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::strcpy(addr.sun_path, path_.c_str());
-    EXPECT_EQ(bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-    EXPECT_EQ(listen(fd_, 4), 0);
+    fd_ = test::listen_unix(path_, 4);
     thread_ = std::thread([this] {
       for (;;) {
         const int c = accept(fd_, nullptr, nullptr);
