@@ -25,8 +25,9 @@ constexpr const char* kUsage =
     "(`mocapctl record start spins.mcap`) while each sensor lies on a table with one axis up,\n"
     "is turned whole turns by hand (3 are plenty, any speed up to ~300 deg/s) and put down\n"
     "again, for each of its three axes, with ~2 s still before and after every spin; putting it\n"
-    "back turned is fine (the magnetometer measures the net turn). Several sensors may be spun\n"
-    "together. Prints each sensor's gyr_scale line for its [[sensor]] table.\n";
+    "back turned is fine (the magnetometer measures the net turn; without one, put it back\n"
+    "against an edge exactly as it lay). Several sensors may be spun together. Prints each\n"
+    "sensor's gyr_scale line for its [[sensor]] table.\n";
 
 /// Samples per sensor of a recording, with the sensors' names.
 struct Recording {
