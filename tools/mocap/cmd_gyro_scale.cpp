@@ -24,10 +24,10 @@ constexpr const char* kUsage =
     "different degree or two in each half turn of the body. Measure it once per sensor: record\n"
     "(`mocapctl record start spins.mcap`) while each sensor lies on a table with one axis up,\n"
     "is turned whole turns by hand (3 are plenty, 10 without a magnetometer; up to ~300 deg/s)\n"
-    "and put down again, for each of its three axes, with ~2 s still before and after every spin; putting it\n"
-    "back turned is fine (the magnetometer measures the net turn; without one, put it back\n"
-    "against an edge exactly as it lay). Several sensors may be spun together. Prints each\n"
-    "sensor's gyr_scale line for its [[sensor]] table.\n";
+    "and put down again, for each of its three axes, with ~2 s still before and after every\n"
+    "spin; putting it back turned is fine (the magnetometer measures the net turn; without one,\n"
+    "put it back against an edge exactly as it lay). Several sensors may be spun together.\n"
+    "Prints each sensor's gyr_scale line for its [[sensor]] table.\n";
 
 /// Samples per sensor of a recording, with the sensors' names.
 struct Recording {
