@@ -2,6 +2,7 @@
 #include "mocap/filter/gyro_scale.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -68,7 +69,7 @@ GyroScaleResult estimate_gyro_scale(std::span<const ImuSample> s, const GyroScal
     // below the still threshold, belong to the spin).
     Eigen::Vector3d theta = Eigen::Vector3d::Zero();
     for (size_t m = (a.begin + a.end) / 2 + 1; m <= (b.begin + b.end) / 2 && m < s.size(); ++m) {
-      if (!s[m].has(kFieldGyr) || m == 0) continue;
+      if (!s[m].has(kFieldGyr)) continue;
       const double dt = (s[m].t_host_ns - s[m - 1].t_host_ns) * 1e-9;
       if (dt > 0 && dt < 0.5) theta += (s[m].gyr_rad_s - bias) * dt;
     }

@@ -8,9 +8,10 @@
 // axis vertical), and put down again; the rests before and after each spin give the bias, and
 // the gyro's integral over the spin should be 360 deg x turns plus the net change of heading
 // between the two rests. That net change is read from the magnetometer (the field's direction
-// about the spin axis at the two rests: the same orientation up to the heading, so a hard-iron
-// offset cancels to first order), or taken as 0 without one (the sensor put back against a
-// stop). Every spin about an axis adds to that axis's estimate; axes never spun keep scale 1.
+// about the spin axis at the two rests, after the hard-iron offset across the axis is taken out:
+// the centre of the circle the field draws during the spin), or taken as 0 without one (the
+// sensor put back against a stop). Every spin about an axis adds to that axis's estimate; axes
+// never spun keep scale 1.
 #pragma once
 
 #include <Eigen/Core>
