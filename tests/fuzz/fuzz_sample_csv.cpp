@@ -1,9 +1,9 @@
 // libFuzzer target: the CSV sample importer of `mocap replay` and `mocap gyro-scale`. Any bytes
 // give samples or an error naming the line; every emitted sample is finite, in time order, with
 // a known sensor; the gyro scale estimate of what was read is finite and positive.
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <cmath>
 #include <string_view>
 #include <vector>
 
