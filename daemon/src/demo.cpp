@@ -16,7 +16,6 @@
 
 #include "mocap/core/time.hpp"
 #include "mocap/drivers/sim_encoder.hpp"
-#include "mocap/filter/gyro_scale.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/sim/sensor_model.hpp"
 #include "mocap/sim/table_spin.hpp"
@@ -54,10 +53,7 @@ class DemoService final : public Service {
       if (cfg.demo.gyro_scale_calibration) {
         // What `mocap gyro-scale` measures on the sensor's table spins, as a user does once.
         const Eigen::Vector3d g =
-            filt::estimate_gyro_scale(sim::table_spin_samples(performer_->sensor_errors(i),
-                                                              sim::MagneticFieldParams{},
-                                                              s.rate_hz))
-                .scale();
+            sim::calibrated_gyro_scale(performer_->sensor_errors(i), s.rate_hz);
         s.gyr_scale = std::array<double, 3>{g.x(), g.y(), g.z()};
       }
       if (direct_) {

@@ -8,7 +8,6 @@
 #include "mocap/core/units.hpp"
 #include "mocap/filter/attitude_filter.hpp"
 #include "mocap/filter/filter_param_names.hpp"
-#include "mocap/filter/gyro_scale.hpp"
 #include "mocap/filter/rig_field_consensus.hpp"
 #include "mocap/sim/motion.hpp"
 #include "mocap/sim/performer.hpp"
@@ -71,10 +70,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   gyr_scale.fill(Eigen::Vector3d::Ones());
   if (o.gyro_scale_calibration) {
     for (int id = 0; id < Performer::kSensorCount; ++id)
-      gyr_scale[id] =
-          filt::estimate_gyro_scale(
-              table_spin_samples(perf.sensor_errors(id), MagneticFieldParams{}, o.rate_hz))
-              .scale();
+      gyr_scale[id] = calibrated_gyro_scale(perf.sensor_errors(id), o.rate_hz);
   }
   filt::RigFieldConsensus consensus(filters.size());
   CalibratorOptions copt;

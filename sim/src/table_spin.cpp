@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "mocap/core/units.hpp"
+#include "mocap/filter/gyro_scale.hpp"
 #include "smoothstep.hpp"
 
 namespace mocap::sim {
@@ -58,6 +59,11 @@ std::vector<ImuSample> table_spin_samples(SensorErrorModel model, const Magnetic
     }
   }
   return out;
+}
+
+Eigen::Vector3d calibrated_gyro_scale(const SensorErrorModel& model, double rate_hz) {
+  return filt::estimate_gyro_scale(table_spin_samples(model, MagneticFieldParams{}, rate_hz))
+      .scale();
 }
 
 }  // namespace mocap::sim

@@ -14,7 +14,6 @@
 #include "mocap/core/units.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/rig_engine.hpp"
-#include "mocap/filter/gyro_scale.hpp"
 #include "mocap/sim/body_pose.hpp"
 #include "mocap/sim/motion.hpp"
 #include "mocap/sim/performer.hpp"
@@ -193,9 +192,10 @@ TEST(DaemonCalibrationHeading, MountNormalsByDefaultAndSiteNormalsFromTheConfig)
 
 // RMS error (deg) of one joint (the rotation of `joint` relative to its parent) after the
 // calibration procedure of `motion`, through the real RigEngine with the default config and the
-// performer's sensors; `setup` adjusts the config before the engine is built.
-template <typename Setup>
-double joint_rmse_deg(const char* motion, uint64_t seed, Segment joint, Setup setup) {
+// performer's sensors; `setup` adjusts the config before the engine is built, `check` looks at
+// the engine once built.
+template <typename Setup, typename Check>
+double joint_rmse_deg(const char* motion, uint64_t seed, Segment joint, Setup setup, Check check) {
   ConfigErrors errs;
   std::optional<Config> parsed = parse_config("", "<defaults>", {}, errs);
   EXPECT_TRUE(parsed) << errs.to_string();
@@ -210,6 +210,7 @@ double joint_rmse_deg(const char* motion, uint64_t seed, Segment joint, Setup se
   const double calib_end_s = perf.calibration_window_s().second;
   const double eval_from_s = calib_end_s + sim::calibration_moves_s();
   RigEngine engine(cfg);
+  check(engine);
   const int j = index(joint);
   double sum_sq = 0;
   int n = 0;
@@ -231,9 +232,14 @@ double joint_rmse_deg(const char* motion, uint64_t seed, Segment joint, Setup se
 // RMS wrist_l error of a squat, seed 4 (the wrist whose hand and forearm magnetometers'
 // hard-iron residuals drift apart as the arms rise); relative_mag_heading as given.
 double squat_wrist_rmse_deg(bool relative_mag_heading) {
-  return joint_rmse_deg("squat", 4, Segment::hand_l, [&](Config& cfg, sim::Performer&) {
-    cfg.calibration.relative_mag_heading = relative_mag_heading;
-  });
+  return joint_rmse_deg(
+      "squat", 4, Segment::hand_l,
+      [&](Config& cfg, sim::Performer&) {
+        cfg.calibration.relative_mag_heading = relative_mag_heading;
+      },
+      [&](RigEngine& engine) {
+        EXPECT_EQ(engine.skeleton().options().relative_mag_heading.enabled, relative_mag_heading);
+      });
 }
 
 TEST(DaemonRelativeMagHeading, WristFollowsTheGyrosThroughTheRigEngine) {
@@ -250,16 +256,22 @@ TEST(DaemonRelativeMagHeading, WristFollowsTheGyrosThroughTheRigEngine) {
 // errors turn the thigh's and the pelvis's headings apart.
 TEST(DaemonGyroScale, TableSpinCalibrationKeepsTheHipThroughTurns) {
   const auto hip = [](bool calibrated) {
-    return joint_rmse_deg("turn", 2, Segment::thigh_l, [&](Config& cfg, sim::Performer& perf) {
-      if (!calibrated) return;
-      for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
-        const Eigen::Vector3d g =
-            filt::estimate_gyro_scale(
-                sim::table_spin_samples(perf.sensor_errors(i), sim::MagneticFieldParams{}, 100))
-                .scale();
-        cfg.sensors[i].gyr_scale = std::array<double, 3>{g.x(), g.y(), g.z()};
-      }
-    });
+    return joint_rmse_deg(
+        "turn", 2, Segment::thigh_l,
+        [&](Config& cfg, sim::Performer& perf) {
+          if (!calibrated) return;
+          for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
+            const Eigen::Vector3d g = sim::calibrated_gyro_scale(perf.sensor_errors(i), 100);
+            cfg.sensors[i].gyr_scale = std::array<double, 3>{g.x(), g.y(), g.z()};
+          }
+        },
+        [&](RigEngine& engine) {
+          // Every sensor's segment is marked calibrated for the heading smoothing, or none.
+          const auto& marked =
+              engine.skeleton().options().relative_mag_heading.gyro_scale_calibrated;
+          for (int i = 0; i < sim::Performer::kSensorCount; ++i)
+            EXPECT_EQ(marked[index(sim::Performer::sensor_segment(i))], calibrated) << i;
+        });
   };
   const double on = hip(true), off = hip(false);
   std::printf("hip_l RMSE with/without the gyro scale calibration: %.2f / %.2f deg\n", on, off);

@@ -16,4 +16,8 @@ namespace mocap::sim {
 std::vector<ImuSample> table_spin_samples(SensorErrorModel model, const MagneticFieldParams& field,
                                           double rate_hz, int turns = 3, double extra_deg = 0);
 
+/// What `mocap gyro-scale` measures on the sensor's table spins (default field, three turns per
+/// axis): the gyr_scale a user would configure for it.
+Eigen::Vector3d calibrated_gyro_scale(const SensorErrorModel& model, double rate_hz);
+
 }  // namespace mocap::sim
