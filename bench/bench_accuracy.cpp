@@ -2,13 +2,13 @@
 // AttitudeFilter per sensor -> N-pose calibration -> skeleton FK + root motion) for each motion,
 // with and without magnetic disturbances. Prints JSON (per-joint angle RMSE, segment orientation
 // RMSE, root drift vs ground truth) and, with --markdown, the table for docs/accuracy.md.
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <cstdlib>
-#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
-#include <utility>
 #include <vector>
 
 #include "bench.hpp"
@@ -54,41 +54,32 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
   j["three_dof_max_rmse_deg"] = r.three_dof_max_rmse_deg;
   j["inferred_neck_max_rmse_deg"] = r.inferred_max_rmse_deg;
   j["segment_mean_rmse_deg"] = r.segment_mean_rmse_deg;
+  j["metric_mean_deg"] = r.metric_mean_deg;
+  j["alone_mean_deg"] = r.alone_mean_deg;
+  {
+    nlohmann::json m, a;
+    double worst = -1e9;
+    for (int s = 0; s < kSegmentCount; ++s) {
+      if (r.alone_segment_deg[s] == 0 && r.metric_segment_deg[s] == 0) continue;
+      m[std::string(kSegmentNames[s])] = r.metric_segment_deg[s];
+      a[std::string(kSegmentNames[s])] = r.alone_segment_deg[s];
+      worst = std::max(worst, r.metric_segment_deg[s] - r.alone_segment_deg[s]);
+    }
+    j["metric_segment_deg"] = m;
+    j["alone_segment_deg"] = a;
+    j["worst_segment_excess_deg"] = worst;
+  }
   nlohmann::json diag;
   for (int s = 0; s < kSegmentCount; ++s) {
     if (r.sensor_inclination_rmse_deg[s] == 0 && r.sensor_heading_drift_deg[s] == 0) continue;
     diag[std::string(kSegmentNames[s])] = {
-        {"npose_mount_yaw_error_deg", r.npose_mount_yaw_error_deg[s]},
         {"mount_yaw_error_deg", r.mount_yaw_error_deg[s]},
+        {"pose_deviation_deg", r.pose_deviation_deg[s]},
         {"filter_heading_drift_deg", r.sensor_heading_drift_deg[s]},
         {"filter_inclination_rmse_deg", r.sensor_inclination_rmse_deg[s]},
-        {"mag_disturbed_fraction", r.sensor_mag_disturbed_fraction[s]},
-        {"reference_imposed", r.sensor_ref_imposed[s]},
-        {"anchor_trust_deg", r.sensor_anchor_trust_deg[s]}};
+        {"mag_disturbed_fraction", r.sensor_mag_disturbed_fraction[s]}};
   }
   j["sensor_diagnostics"] = diag;
-  j["hinges_identified"] = r.hinges_identified;
-  for (size_t h = 0; h < r.hinges.size(); ++h) {
-    const HingeEstimate& e = r.hinges[h];
-    const RefinePair& pr = kRefinePairs[h];
-    const std::string key = std::string(name(pr.parent)) + "-" + std::string(name(pr.child));
-    j["hinge_refinement"][key] = {{"valid", e.valid},
-                                  {"travel_deg", e.travel_deg},
-                                  {"parent_yaw_deg", e.parent_yaw_deg},
-                                  {"child_yaw_deg", e.child_yaw_deg},
-                                  {"applied_child_yaw_deg", e.applied_child_yaw_deg},
-                                  {"rms_residual", e.rms_residual},
-                                  {"parent_travel_deg", e.parent_travel_deg},
-                                  {"parent_valid", e.parent_valid}};
-  }
-  for (size_t h = 0; h < r.coupling.size(); ++h) {
-    const CouplingHinge& c = r.coupling[h];
-    const CouplingPair& pr = kCouplingPairs[h];
-    const std::string key = std::string(name(pr.parent)) + "-" + std::string(name(pr.child));
-    j["heading_coupling"][key] = {{"offset_deg", c.offset_deg},
-                                  {"last_residual_deg", c.last_residual_deg},
-                                  {"observed_s", c.observed_s}};
-  }
   j["root_drift_m"] = r.root_drift_m;
   j["root_max_error_m"] = r.root_max_error_m;
   j["distance_walked_m"] = r.distance_walked_m;
@@ -153,8 +144,6 @@ void print_markdown_row(const sim::AccuracyResult& r) {
                r.inferred_max_rmse_deg, r.segment_mean_rmse_deg, drift);
 }
 
-/// Applies a comma list of name=value overrides to the named fields; false (with a message
-/// naming the option and the entry) on an unknown name or a bad number.
 /// An on|off option (absent: the default already in `out`); false after printing an error.
 bool on_off(const CliArgs& args, const char* name, bool& out) {
   if (!args.has(name)) return true;
@@ -167,31 +156,13 @@ bool on_off(const CliArgs& args, const char* name, bool& out) {
   return true;
 }
 
-bool set_params(const std::string& list, const char* option,
-                std::initializer_list<std::pair<std::string_view, double*>> fields) {
-  for (const std::string& kv : expand(list, {})) {
-    if (kv.empty()) continue;
-    const size_t eq = kv.find('=');
-    double* field = nullptr;
-    for (const auto& [name, ptr] : fields)
-      if (eq != std::string::npos && kv.compare(0, eq, name) == 0 && name.size() == eq) field = ptr;
-    char* end = nullptr;
-    const double v = eq == std::string::npos ? 0 : std::strtod(kv.c_str() + eq + 1, &end);
-    if (!field || !end || end == kv.c_str() + eq + 1 || *end != '\0') {
-      std::fprintf(stderr, "mocap bench accuracy: bad --%s '%s'\n", option, kv.c_str());
-      return false;
-    }
-    *field = v;
-  }
-  return true;
-}
-
 }  // namespace
 
 int run_accuracy(int argc, char** argv) {
   CliArgs args;
   args.option("motion", "motion name, comma list or 'all' (default all)")
-      .option("disturbance", "none|magnet|desk|both, comma list or 'all' (default none,both)")
+      .option("disturbance",
+              "none|magnet|desk|both|arm_magnet, comma list or 'all' (default none,both)")
       .option("seed", "random seed (default 1)")
       .option("rate", "sensor rate in Hz (default 100)")
       .option(
@@ -205,28 +176,10 @@ int run_accuracy(int argc, char** argv) {
             "sensor) and divide it out")
       .flag("warmup",
             "the sensors run for 22 s of walking and turning before the calibration stand")
+      .option("mag", "with magnetometers (9D): on|off (default on; off: 6D)")
+      .option("clips", "every .bvh file in this folder as a motion (calibration procedure first)")
+      .option("seeds", "comma list of seeds (default: --seed)")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
-      .option("coupling", "heading coupling at knees/elbows: on|off (default on)")
-      .option("relative-mag",
-              "relative magnetometer heading smoothing: on|off (default on, as the daemon)")
-      .option("relative-mag-param",
-              "RelativeMagHeadingOptions overrides, comma list of name=value "
-              "(tau_s, turn_deg, turn_memory_s, turn_tau_s)")
-      .option("anchor",
-              "filter heading anchored at the calibration: on|off (default on, as the daemon)")
-      .option("consensus",
-              "rig consensus of the reference field: on|off (default on, as the daemon)")
-      .option("coupling-param",
-              "HeadingCouplingOptions overrides, comma list of name=value "
-              "(tau_s, min_flex_deg, min_axis_horizontal, "
-              "max_elevation_mismatch, max_correction_deg, max_residual_deg)")
-      .flag("no-carry", "heading coupling: do not carry a child's correction to the next segment")
-      .flag("no-refine", "N-pose calibration only (no hinge-motion refinement)")
-      .option("refine-param",
-              "HingeRefineOptions overrides, comma list of name=value (min_travel_deg, "
-              "max_yaw_deg, min_rate_deg_s, via_still_fraction, "
-              "min_parent_off_axis_deg, basin_margin, direction_fraction, noise_weighting (0|1), "
-              "block_min_samples, block_noise_floor)")
       .option("sensor-errors",
               "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
               "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)")
@@ -261,50 +214,10 @@ int run_accuracy(int argc, char** argv) {
                  "mocap bench accuracy: --heading must be normals, pelvis, mean or truth\n");
     return 2;
   }
-  if (args.has("no-refine")) base.hinge_refine.enabled = false;
   if (args.has("gyro-scale-calibration")) base.gyro_scale_calibration = true;
-  if (!on_off(args, "coupling", base.heading_coupling.enabled) ||
-      !on_off(args, "relative-mag", base.relative_mag_heading.enabled) ||
-      !on_off(args, "anchor", base.anchor_heading) ||
-      !on_off(args, "consensus", base.rig_consensus))
-    return 2;
-  HeadingCouplingOptions& c = base.heading_coupling;
-  if (!set_params(args.get_or("coupling-param", ""), "coupling-param",
-                  {{"tau_s", &c.tau_s},
-                   {"min_flex_deg", &c.min_flex_deg},
-                   {"min_axis_horizontal", &c.min_axis_horizontal},
-                   {"max_elevation_mismatch", &c.max_elevation_mismatch},
-                   {"max_correction_deg", &c.max_correction_deg},
-                   {"max_residual_deg", &c.max_residual_deg},
-                   {"disturbed_weight", &c.disturbed_weight}}))
-    return 2;
-  if (args.has("no-carry")) base.heading_coupling.carry_distal = false;
-  RelativeMagHeadingOptions& rm = base.relative_mag_heading;
-  if (!set_params(args.get_or("relative-mag-param", ""), "relative-mag-param",
-                  {{"tau_s", &rm.tau_s},
-                   {"turn_deg", &rm.turn_deg},
-                   {"turn_memory_s", &rm.turn_memory_s},
-                   {"turn_tau_s", &rm.turn_tau_s}}))
-    return 2;
-  HingeRefineOptions& h = base.hinge_refine;
-  double noise_weighting = h.noise_weighting ? 1 : 0;
-  double block_min_samples = h.block_min_samples;
-  if (!set_params(args.get_or("refine-param", ""), "refine-param",
-                  {{"noise_weighting", &noise_weighting},
-                   {"block_min_samples", &block_min_samples},
-                   {"block_noise_floor", &h.block_noise_floor},
-                   {"min_travel_deg", &h.min_travel_deg},
-                   {"max_yaw_deg", &h.max_yaw_deg},
-                   {"min_rate_deg_s", &h.min_rate_deg_s},
-                   {"via_still_fraction", &h.via_still_fraction},
-                   {"direction_fraction", &h.direction_fraction},
-                   {"min_parent_off_axis_deg", &h.min_parent_off_axis_deg},
-                   {"basin_margin", &h.basin_margin}}))
-    return 2;
-  h.noise_weighting = noise_weighting != 0;
-  h.block_min_samples = static_cast<int>(block_min_samples);
   if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");
+  if (!on_off(args, "mag", base.use_mag)) return 2;
   base.warmup = args.has("warmup");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();
   if (args.has("sensor-errors")) {
@@ -315,9 +228,21 @@ int run_accuracy(int argc, char** argv) {
       return 2;
     }
   }
-  const auto motions = expand(args.get_or("motion", "all"), all_motions);
+  auto motions = expand(args.get_or("motion", "all"), all_motions);
+  if (args.has("clips")) {
+    motions.clear();
+    std::vector<std::string> files;
+    for (const auto& e : std::filesystem::directory_iterator(args.get_or("clips", ".")))
+      if (e.path().extension() == ".bvh") files.push_back(e.path().string());
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) motions.push_back(f);
+    base.calibration_moves = true;
+  }
+  std::vector<uint64_t> seeds;
+  for (const std::string& v : expand(args.get_or("seeds", std::to_string(seed)), {}))
+    seeds.push_back(std::strtoull(v.c_str(), nullptr, 10));
   const auto disturbances =
-      expand(args.get_or("disturbance", "none,both"), {"none", "magnet", "desk", "both"});
+      expand(args.get_or("disturbance", "none,both"), {"none", "magnet", "desk", "both", "arm_magnet"});
 
   nlohmann::json out;
   out["bench"] = "accuracy";
@@ -336,12 +261,16 @@ int run_accuracy(int argc, char** argv) {
   bool all_ok = true;
   try {
     for (const auto& m : motions) {
-      for (const auto& d : disturbances) {
+      for (const auto& d : disturbances)
+      for (const uint64_t sd : seeds) {
         sim::AccuracyOptions o = base;
         o.motion = m;
         o.disturbance = d;
+        o.seed = sd;
         const sim::AccuracyResult r = sim::run_accuracy(o);
-        out["results"].push_back(to_json(r));
+        nlohmann::json jr = to_json(r);
+        jr["seed"] = sd;
+        out["results"].push_back(jr);
         if (args.has("markdown")) print_markdown_row(r);
         all_ok = all_ok && r.calibrated;
       }

@@ -227,6 +227,13 @@ class TableReader {
   }
 
   /// Reports keys that were never asked for, with the nearest known name.
+  /// A key of a removed feature: accepted, ignored, and named in the warnings.
+  void removed(std::string_view key, std::string_view why) {
+    if (node(key))
+      ctx_.errors.warnings.push_back(join(path_, key) + ": removed (" + std::string(why) +
+                                     "); ignored");
+  }
+
   void finish() {
     if (!t_) return;
     for (const auto& [k, v] : *t_) {
@@ -486,8 +493,8 @@ Config read_root(const toml::table& root, Ctx& ctx) {
   {
     TableReader b(r.table("body"), &root, "body", ctx);
     read_body(b, c.body, ctx);
-    b.boolean("enforce_limits", c.body.enforce_limits);
     b.boolean("root_motion", c.body.root_motion);
+    b.removed("enforce_limits", "joint limits are reported, never imposed: docs/skeleton.md");
     b.finish();
   }
   {
@@ -496,9 +503,8 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     k.num("countdown_s", c.calibration.countdown_s, 0, 60);
     k.num("capture_s", c.calibration.capture_s, 0.05, 10);
     k.str("file", c.calibration.file);
-    k.boolean("refine_hinges", c.calibration.refine_hinges);
-    k.boolean("heading_coupling", c.calibration.heading_coupling);
-    k.boolean("relative_mag_heading", c.calibration.relative_mag_heading);
+    for (const char* key : {"refine_hinges", "heading_coupling", "relative_mag_heading"})
+      k.removed(key, "it made tracking of real motion worse: docs/accuracy.md");
     k.str("heading", c.calibration.heading, {"mount_normals", "pelvis_sensor", "mean_sensors"});
     k.finish();
   }
@@ -725,7 +731,6 @@ toml::array toml_vec3(const Eigen::Vector3d& v) {
 /// [body] with every override inlined (no file keys), so a recorded configuration is complete.
 toml::table body_to_toml(const BodyConfig& b) {
   toml::table t{{"height_m", b.model.height_m},
-                {"enforce_limits", b.enforce_limits},
                 {"root_motion", b.root_motion}};
   toml::table segments;
   for (int i = 0; i < kSegmentCount; ++i) {
@@ -781,9 +786,6 @@ std::string config_to_toml(const Config& c) {
                           {"countdown_s", c.calibration.countdown_s},
                           {"capture_s", c.calibration.capture_s},
                           {"file", c.calibration.file},
-                          {"refine_hinges", c.calibration.refine_hinges},
-                          {"heading_coupling", c.calibration.heading_coupling},
-                          {"relative_mag_heading", c.calibration.relative_mag_heading},
                           {"heading", c.calibration.heading}});
   toml::table outs;
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},

@@ -209,21 +209,6 @@ std::string Daemon::status_json() const {
     const CalibrationProgress& c = st.calibration;
     nlohmann::json cal;
     cal["message"] = std::string(c.message.data(), strnlen(c.message.data(), c.message.size()));
-    cal["refining"] = c.refining;
-    cal["needed_travel_deg"] = c.needed_travel_deg;
-    nlohmann::json mounts = nlohmann::json::array();
-    int identified = 0;
-    for (const auto& m : c.mountings) {
-      if (m.segment < 0 || !m.tracked) continue;
-      identified += m.identified;
-      mounts.push_back({{"segment", std::string(kSegmentNames[m.segment])},
-                        {"joint", std::string(kJointNames[m.segment])},
-                        {"identified", m.identified},
-                        {"travel_deg", std::round(m.travel_deg * 10) / 10},
-                        {"yaw_deg", std::round(m.yaw_deg * 100) / 100}});
-    }
-    cal["mountings"] = mounts;
-    cal["identified"] = identified;
     j["calibration"] = cal;
   }
   {

@@ -22,9 +22,7 @@ Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log) {
     log.info("demo: %zu simulated sensors (%s path, %s protocol, motion '%s')", cfg.sensors.size(),
              cfg.demo.path.c_str(), cfg.demo.protocol.c_str(), cfg.demo.motion.c_str());
   }
-  auto engine = std::make_unique<RigEngine>(cfg, &log);
-  RigEngine* eng = engine.get();
-  parts.engine = std::move(engine);
+  parts.engine = std::make_unique<RigEngine>(cfg, &log);
   if (!(demo && cfg.demo.path == "direct"))
     parts.device_factory = [](const DeviceSpec& spec, Logger l) {
       return make_device(spec, std::move(l));
@@ -33,7 +31,6 @@ Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log) {
   // The calibration text is read on the control thread while the pipeline may change it: the
   // recorder stores the calibration file's content when there is one.
   const std::string calib_file = cfg.calibration.file;
-  (void)eng;
   parts.recorder = std::make_unique<SessionRecorder>(
       cfg,
       [calib_file]() -> std::string {
@@ -58,7 +55,7 @@ int run_replay_daemon(const std::string& path, double speed, const Config* rig, 
     cfg.calibration.file.clear();
     RigEngine engine(cfg, &log);
     if (const std::string ct = src->calibration_text(); !ct.empty())
-      engine.skeleton().set_calibration(parse_calibration(ct, path + " (calibration)"));
+      engine.tracker().set_calibration(parse_calibration(ct, path + " (calibration)"));
     PipelineCore core(cfg.pipeline, cfg.calibration, sensor_infos(cfg), engine);
     core.set_frame_flag(kFrameReplay, true);
     auto sinks = make_outputs(cfg, log);

@@ -33,21 +33,6 @@ void print_status_table(const nlohmann::json& j) {
   if (const auto cal = j.find("calibration"); cal != j.end() && cal->is_object()) {
     const std::string msg = cal->value("message", std::string());
     if (!msg.empty()) std::printf("calibration: %s\n", msg.c_str());
-    if (cal->value("refining", false)) {
-      // Which mountings the knee bends and elbow curls have identified, and how far the others are.
-      std::string line;
-      for (const auto& m : cal->value("mountings", nlohmann::json::array())) {
-        char part[64];
-        if (m.value("identified", false))
-          std::snprintf(part, sizeof part, "%s ok", m.value("segment", std::string()).c_str());
-        else
-          std::snprintf(part, sizeof part, "%s %.0f/%.0f deg",
-                        m.value("segment", std::string()).c_str(), m.value("travel_deg", 0.0),
-                        cal->value("needed_travel_deg", 0.0));
-        line += (line.empty() ? "" : ", ") + std::string(part);
-      }
-      std::printf("mountings from motion: %s\n", line.c_str());
-    }
   }
   const std::string rec = j.value("recording", std::string());
   std::printf("recording: %s\n", rec.empty() ? "no" : rec.c_str());

@@ -67,6 +67,8 @@ int main(int argc, char** argv) {
     cfg = load_config(config_path, sets, errors, &default_validators());
   else
     cfg = parse_config("", "<defaults>", sets, errors, &default_validators());
+  for (const std::string& w : errors.warnings)
+    std::fprintf(stderr, "mocapd: warning: %s\n", w.c_str());
   if (!cfg) {
     std::fprintf(stderr, "%s", errors.to_string().c_str());
     std::fprintf(stderr, "mocapd: configuration invalid (%zu problem%s); not starting\n",

@@ -459,7 +459,6 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       st_.hi_n = 0;
       st_.hi_dt_s = 0;
       select_hard_iron(r6 * m_c, r6 * (m_c - st_.hard_iron.used_uT));
-      update_anchor();
     }
   }
   const Eigen::Vector3d mag = mag_raw - hard_iron_uT();
@@ -511,7 +510,6 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
         if (!st_.mag_have_ref) end_mag_startup();
         st_.mag_ref_norm = st_.mag_cand_norm;
         st_.mag_ref_dip = st_.mag_cand_dip;
-        st_.ref_imposed = false;
         st_.mag_disturbed = false;
         st_.mag_undisturbed_t_s = p_.mag_min_undisturbed_time_s;
       }
@@ -523,10 +521,8 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     }
   }
 
-  // Heading measurement; an anchor adds back what the offset learnt since caused at the
-  // anchor pose, so at that pose learning it changes nothing.
-  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) + st_.anchor_heading_rad +
-                             st_.anchor_trust_rad - st_.delta_rad);
+  // Heading measurement.
+  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
   if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
     // Gyro-consistency: the field in the almost-inertial frame must stay put.
     const Eigen::Vector3d m_i = st_.q_gyr * mag;
@@ -590,36 +586,6 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
       st_.mag_reject_t_s = std::max(st_.mag_reject_t_s - p_.mag_rejection_factor * ts, 0.0);
     }
   }
-  if (st_.anchor_trust_pending) {
-    // Trust anchor: the calibration took this sensor's heading while its field was untrusted.
-    // If the field then was not the earth field (its norm/dip differ from the reference, or
-    // before one exists from the current field) that heading was bent: it is held, and the
-    // first trusted field's heading error becomes part of the anchor (averaged) instead of
-    // turning the heading away from what the calibration absorbed. A field then like the
-    // reference: nothing to keep.
-    const bool ref = st_.mag_have_ref;
-    const double rn = ref ? st_.mag_ref_norm : st_.mag_norm_dip[0];
-    const double rd = ref ? st_.mag_ref_dip : st_.mag_norm_dip[1];
-    const bool bent = field_deviation2(st_.anchor_cal_norm, st_.anchor_cal_dip, rn, rd) > 1.0;
-    if (!bent) {
-      if (ref && !st_.mag_disturbed) st_.anchor_trust_pending = false;
-    } else if (!ref) {
-      use_init = false;
-      k = 0;
-    } else if (!st_.mag_disturbed) {
-      use_init = false;
-      k = 0;
-      if (field_deviation2(st_.mag_norm_dip[0], st_.mag_norm_dip[1], rn, rd) <=
-          p_.anchor_trust_max_dev) {
-        // Running mean of the field's heading error over the window goes into the anchor
-        // (a field bent at the window's start is averaged out by the clean rest of it).
-        ++st_.anchor_trust_n;
-        st_.anchor_trust_rad = wrap_pi(st_.anchor_trust_rad - err / st_.anchor_trust_n);
-        st_.anchor_trust_t_s += ts;
-        if (st_.anchor_trust_t_s >= p_.anchor_trust_avg_s) st_.anchor_trust_pending = false;
-      }
-    }
-  }
   if (st_.k_mag_init != 0 && use_init) {
     k = std::max(k, st_.k_mag_init);
     st_.k_mag_init = st_.k_mag_init / (st_.k_mag_init + 1);
@@ -662,84 +628,6 @@ void AttitudeFilter::end_mag_startup() {
   const double s0 = p_.mag_first_ref_sigma_deg * kRadPerDeg;
   st_.delta_var_rad2 = std::max(st_.delta_var_rad2, s0 * s0);
   st_.k_mag_init = st_.delta_var_rad2 / (st_.delta_var_rad2 + c_.heading_r0_rad2);
-}
-
-void AttitudeFilter::anchor_heading() {
-  // The field is untrusted now: the calibration takes a gyro-held heading; keep it when the
-  // field is trusted again (update_mag). A trust anchor already set stays (it is part of the
-  // heading this calibration takes).
-  st_.anchor_trust_armed = p_.anchor_trust_avg_s > 0 && (mag_disturbed() || mag_no_reference());
-  st_.anchor_trust_pending = st_.anchor_trust_armed;
-  st_.anchor_trust_n = 0;
-  st_.anchor_trust_t_s = 0;
-  st_.anchor_cal_norm = st_.mag_norm_dip[0];
-  st_.anchor_cal_dip = st_.mag_norm_dip[1];
-  st_.anchor_set = true;
-  st_.q_anchor = st_.q_delta * (st_.q_acc * st_.q_gyr);
-  st_.anchor_offset_uT = hard_iron_uT();
-  st_.anchor_restarts = st_.hard_iron.restarts;
-  st_.anchor_heading_rad = 0;
-}
-
-void AttitudeFilter::clear_heading_anchor() {
-  st_.anchor_set = false;
-  st_.anchor_heading_rad = 0;
-  st_.anchor_trust_pending = false;
-  st_.anchor_trust_armed = false;
-  st_.anchor_trust_rad = 0;
-}
-
-void AttitudeFilter::set_reference_field(double norm_uT, double dip_rad) {
-  if (!(norm_uT > 0) || !std::isfinite(norm_uT) || !std::isfinite(dip_rad) ||
-      !p_.mag_dist_rejection)
-    return;
-  if (!st_.mag_have_ref) end_mag_startup();  // as if accepted in update_mag
-  st_.mag_ref_norm = norm_uT;
-  st_.mag_ref_dip = dip_rad;
-  st_.ref_imposed = true;
-  if (st_.anchor_trust_armed && !st_.anchor_trust_pending &&
-      field_deviation2(st_.anchor_cal_norm, st_.anchor_cal_dip, norm_uT, dip_rad) > 1.0) {
-    // The calibration's field was taken for the earth's only because this sensor had accepted
-    // it as its own reference: it was not; keep the heading the calibration took (update_mag).
-    st_.anchor_trust_pending = true;
-    st_.anchor_trust_n = 0;
-    st_.anchor_trust_t_s = 0;
-  }
-  // The sensor's own candidate (a local field) must be earned again, while rotating.
-  st_.mag_cand_t_s = 0;
-  if (std::abs(st_.mag_norm_dip[0] - norm_uT) >= p_.mag_norm_th * norm_uT ||
-      std::abs(st_.mag_norm_dip[1] - dip_rad) >= p_.mag_dip_th_deg * kRadPerDeg) {
-    st_.mag_disturbed = true;
-    st_.mag_undisturbed_t_s = 0;
-  }
-}
-
-// The offset learnt since the anchor, b_new - b_anchor, was still in the field when the
-// anchor was taken: there it added q_anchor (b_new - b_anchor) to the earth-frame field and
-// turned the heading by the change of atan2(m_x, m_y) (the heading measurement).
-void AttitudeFilter::update_anchor() {
-  if (!st_.anchor_set) return;
-  const double f = st_.mag_ref_norm > 0 ? st_.mag_ref_norm : st_.hard_iron.f_uT;
-  const double dip = st_.mag_ref_norm > 0 ? st_.mag_ref_dip : 0.0;
-  const double fh = f * std::cos(dip);
-  if (!(fh > 0)) return;
-  if (st_.hard_iron.restarts != st_.anchor_restarts) {
-    // The estimator restarted (the model broke: a magnet, a gradient): what it had learnt is
-    // forgotten, so is the correction derived from it; the anchor stays inert from here on.
-    st_.anchor_heading_rad = 0;
-    return;
-  }
-  const Eigen::Vector3d db = hard_iron_uT() - st_.anchor_offset_uT;
-  // Only a residual-sized offset can have been present unnoticed at the anchor; a larger one
-  // (a magnet attached since, a field gradient taken as an offset) leaves c as it was.
-  // An offset applied because it explains a norm/dip deviation from the reference field
-  // appeared after that reference was taken (the reference included the residual present at
-  // start-up): only the consistent path's offset is taken as present at the anchor.
-  if (!st_.hi_applied_consistent || db.norm() > p_.anchor_max_offset * f || mag_disturbed()) return;
-  const Eigen::Vector3d v = st_.q_anchor * db;
-  const double c = std::atan2(v.x(), fh + v.y());
-  if (!std::isfinite(c)) return;
-  st_.anchor_heading_rad = c;
 }
 
 double AttitudeFilter::heading_sigma_rad() const {

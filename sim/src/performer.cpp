@@ -108,7 +108,15 @@ void Performer::measure(int id, ImuSample& s) {
   const int64_t t_ns = next_t_ns_[id];
   const double t_s = static_cast<double>(t_ns - params_.t0_ns) / kNsPerS;
   const SensorKinematics k = sensor_kinematics(id, t_s);
-  errors_[id].measure(k, params_.field.field_uT(k.p_earth_m), 1.0 / params_.rate_hz, s);
+  Eigen::Vector3d b_uT;
+  if (params_.field.time_varying()) {
+    TruthFrame body;
+    truth_at(t_s, body);
+    b_uT = params_.field.field_uT(k.p_earth_m, t_s, &body);
+  } else {
+    b_uT = params_.field.field_uT(k.p_earth_m);
+  }
+  errors_[id].measure(k, b_uT, 1.0 / params_.rate_hz, s);
   s.t_host_ns = t_ns;
   s.t_device_ns = static_cast<int64_t>(std::llround(next_k_[id] * (kNsPerS / params_.rate_hz)));
   s.seq = next_k_[id];

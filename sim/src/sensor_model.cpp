@@ -29,19 +29,35 @@ Eigen::Vector3d MagneticFieldParams::earth_field_uT() const {
   return {h * std::sin(dec), h * std::cos(dec), -total_uT * std::sin(inc)};
 }
 
-Eigen::Vector3d MagneticFieldParams::field_uT(const Eigen::Vector3d& p) const {
+Eigen::Vector3d MagneticFieldParams::field_uT(const Eigen::Vector3d& p, double t_s,
+                                              const TruthFrame* body) const {
   Eigen::Vector3d b = earth_field_uT();
   for (const MagneticDipole& d : dipoles) {
-    const Eigen::Vector3d r = p - d.p_earth_m;
+    if (t_s < d.t_begin_s || t_s >= d.t_end_s) continue;
+    Eigen::Vector3d p_dipole = d.p_earth_m, moment = d.moment_A_m2;
+    if (d.carried_by_segment >= 0) {
+      if (!body) continue;
+      const Eigen::Quaterniond& q = body->q_earth_segment[d.carried_by_segment];
+      p_dipole = body->p_earth_segment_m[d.carried_by_segment] + q * d.p_earth_m;
+      moment = q * d.moment_A_m2;
+    }
+    const Eigen::Vector3d r = p - p_dipole;
     const double n = std::max(r.norm(), 0.02);  // inside the magnet: cap the field
     const Eigen::Vector3d u = r / std::max(r.norm(), 1e-9);
     // mu0/(4 pi) = 1e-7 T m/A = 0.1 uT m/A.
-    b += 0.1 * (3 * u * u.dot(d.moment_A_m2) - d.moment_A_m2) / (n * n * n);
+    b += 0.1 * (3 * u * u.dot(moment) - moment) / (n * n * n);
   }
   return b;
 }
 
-std::vector<MagneticDipole> disturbance_preset(std::string_view name, double height_m) {
+bool MagneticFieldParams::time_varying() const {
+  for (const MagneticDipole& d : dipoles)
+    if (d.carried_by_segment >= 0 || d.t_begin_s > -1e300 || d.t_end_s < 1e300) return true;
+  return false;
+}
+
+std::vector<MagneticDipole> disturbance_preset(std::string_view name, double height_m,
+                                               double t_begin_s) {
   const double s = height_m / 1.75;
   // A neodymium magnet (1 A m^2) beside the right thigh, near the hanging right hand and forearm.
   const MagneticDipole magnet{{0.05 * s, -0.33 * s, 0.80 * s}, {0.0, 0.7, 0.7}};
@@ -51,6 +67,17 @@ std::vector<MagneticDipole> disturbance_preset(std::string_view name, double hei
   if (name == "magnet") return {magnet};
   if (name == "desk") return {desk};
   if (name == "both") return {magnet, desk};
+  if (name == "arm_magnet") {
+    // Held against the right forearm, 10 cm from its sensor's site (halfway down the forearm,
+    // outer side), for 6 s: a phone or a tool's magnet near one arm.
+    MagneticDipole held;
+    held.carried_by_segment = index(Segment::forearm_r);
+    held.p_earth_m = Eigen::Vector3d(0.0, -0.10 * s, -0.08 * s);
+    held.moment_A_m2 = Eigen::Vector3d(0.2, 0.2, 0.0);
+    held.t_begin_s = t_begin_s;
+    held.t_end_s = t_begin_s + 6.0;
+    return {held};
+  }
   throw std::invalid_argument("unknown magnetic disturbance '" + std::string(name) +
                               "' (valid: none, magnet, desk, both)");
 }

@@ -145,6 +145,22 @@ CalibrationResult Calibrator::finish() {
     return r;
   }
 
+  // How far the person stood from the assumed pose, where a site normal shows it (its tilt).
+  std::array<double, kSegmentCount>& dev = r.pose_deviation_deg;
+  int worst_dev = -1;
+  for (int i = 0; i < kSegmentCount; ++i) {
+    dev[i] = -1;
+    const Eigen::Vector3d& n_body = opt_.mount_normal_body[i];
+    if (!rig_.tracked(i) || n_body.squaredNorm() == 0) continue;
+    const Eigen::Vector3d n_pose = q_body_segment_in_pose(pose_, i) * n_body.normalized();
+    const Eigen::Vector3d n_earth = mean[i] * opt_.heading_axis_sensor.normalized();
+    dev[i] = std::abs(std::asin(std::clamp(n_earth.z(), -1.0, 1.0)) -
+                      std::asin(std::clamp(n_pose.z(), -1.0, 1.0))) *
+             kRadToDeg;
+    if (worst_dev < 0 || dev[i] > dev[worst_dev]) worst_dev = i;
+  }
+  bool independent_unaligned = false;
+
   // Heading of the body.
   double heading_rad = 0;
   auto forward_heading = [&](const Eigen::Quaterniond& m, double& out) {
@@ -209,6 +225,19 @@ CalibrationResult Calibrator::finish() {
         return std::atan2(sy, sx);
       };
       int used = 0;
+      if (opt_.independent_headings) {
+        // Each sensor's own heading frame: align each on its own normal (the body faces +x).
+        for (int i = 0; i < kSegmentCount; ++i) {
+          int from = i;
+          while (from >= 0 && !use[from]) from = kSegmentParent[from];
+          if (from < 0 || !rig_.tracked(i)) continue;
+          r.calibration.q_correction[i] = yaw_rotation(-h_site[from]);
+          if (from == i) ++used;
+        }
+        heading_rad = 0;
+        if (used == 0) independent_unaligned = true;
+        break;
+      }
       heading_rad = circular_mean(0, 4 * M_PI, used);
       if (used > 0) heading_rad = circular_mean(heading_rad, kMaxNormalSpreadDeg * kDegToRad, used);
       if (used == 0) {
@@ -269,13 +298,20 @@ CalibrationResult Calibrator::finish() {
   for (int i = 0; i < kSegmentCount; ++i) {
     if (!rig_.tracked(i)) continue;
     c.calibrated[i] = true;
+    const Eigen::Quaterniond q_earth_sensor = c.q_correction[i] * mean[i];
     c.q_sensor_segment[i] =
-        (mean[i].conjugate() * q_earth_body * q_body_segment_in_pose(pose_, i)).normalized();
+        (q_earth_sensor.conjugate() * q_earth_body * q_body_segment_in_pose(pose_, i)).normalized();
   }
   r.status = CalibrationStatus::ok;
   std::ostringstream ok;
+  ok.precision(3);
   ok << "calibrated in " << to_string(pose_) << ", heading " << c.heading_deg
      << " deg, worst motion " << worst_motion << " deg";
+  if (worst_dev >= 0)
+    ok << "; furthest from the " << to_string(pose_) << ": " << name(static_cast<Segment>(worst_dev))
+       << " tilted " << dev[worst_dev] << " deg (reported only: the tracked motion is unaffected)";
+  if (independent_unaligned)
+    ok << "; no sensor site with a horizontal normal: each 6D sensor keeps its own heading";
   r.message = ok.str();
   return r;
 }

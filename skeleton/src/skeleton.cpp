@@ -15,9 +15,6 @@ Skeleton::Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping
       limits_(limits),
       rig_(rig),
       opt_(options),
-      refiner_(rig, options.hinge_refine),
-      coupling_(rig, options.heading_coupling),
-      rel_mag_(rig, options.relative_mag_heading),
       root_(model, options.root) {
   validate(limits_);
   q_es_.fill(Eigen::Quaterniond::Identity());
@@ -40,7 +37,7 @@ Skeleton::Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping
 }
 
 void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, int64_t t_ns,
-                                      uint32_t sensor_flags, double mag_heading_rad) {
+                                      uint32_t sensor_flags) {
   if (segment < 0 || segment >= kSegmentCount || !rig_.tracked(segment)) {
     ++rejected_;
     return;
@@ -50,10 +47,7 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
     ++rejected_;
     return;
   }
-  // The relative heading smoothing runs from the calibration on (which restarts it).
-  q_es_[segment] =
-      rel_mag_.apply(segment, Eigen::Quaterniond(q.coeffs() / n), t_ns,
-                     calib_.valid ? mag_heading_rad : std::numeric_limits<double>::quiet_NaN());
+  q_es_[segment] = Eigen::Quaterniond(q.coeffs() / n);
   t_in_ns_[segment] = t_ns;
   have_[segment] = true;
   in_flags_[segment] = sensor_flags & (kSegAtRest | kSegMagDisturbed | kSegMagNoReference);
@@ -61,31 +55,21 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
 }
 
 void Skeleton::set_calibration(const Calibration& c) {
-  calib_ = calib_base_ = c;
+  calib_ = c;
   ++calib_revision_;
-  // The calibration was taken from the sensors' own headings: the smoothing starts from them.
-  rel_mag_.reset();
-  refiner_.reset();
-  coupling_.reset();
 }
 
 void Skeleton::reset_heading(const double* target_heading_deg) {
   std::array<bool, kSegmentCount> have{};
   for (int i = 0; i < kSegmentCount; ++i)
     have[i] = have_[i] && !dead_[i] && rig_.tracked(i);
-  // The reset goes into the base calibration; the hinge yaw offsets (a conjugation, which keeps
-  // an upright segment's heading) stay on top.
   if (target_heading_deg) {
     const double rad = *target_heading_deg * kDegToRad;
-    apply_heading_reset(calib_base_, q_es_, have, &rad);
+    apply_heading_reset(calib_, q_es_, have, &rad);
   } else {
-    apply_heading_reset(calib_base_, q_es_, have);
+    apply_heading_reset(calib_, q_es_, have);
   }
-  calib_ =
-      HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(), refiner_.common_yaw_rad());
   ++calib_revision_;
-  // The reset aligned every segment's heading: the coupling's offsets start again from it.
-  coupling_.reset();
 }
 
 void Skeleton::set_sensor_live(int segment, bool live) {
@@ -111,38 +95,6 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
     flags[i] = kSegTracked | in_flags_[i];
     if (t_now_ns - t_in_ns_[i] > opt_.stale_after_ns) flags[i] |= kSegStale;
   }
-  std::array<bool, kSegmentCount> fresh{};  // live and not stale: what the refiners may use
-  for (int i = 0; i < kSegmentCount; ++i)
-    fresh[i] = live[i] && !(flags[i] & kSegStale);
-  // Hinge refinement: feed the fresh segments under the base calibration; re-apply its offsets.
-  if (opt_.hinge_refine.enabled && calib_base_.valid) {
-    std::array<Eigen::Quaterniond, kSegmentCount> q_base;
-    for (int i = 0; i < kSegmentCount; ++i) {
-      q_base[i] =
-          fresh[i] ? calib_base_.segment_from_sensor(i, q_es_[i]) : Eigen::Quaterniond::Identity();
-    }
-    refiner_.add(q_base, t_in_ns_, fresh, t_now_ns);
-    if (refiner_.update(t_now_ns)) {
-      const Calibration previous = calib_;
-      calib_ = HingeAxisRefiner::apply(calib_base_, refiner_.yaw_offset_rad(),
-                                       refiner_.common_yaw_rad());
-      // One estimator: the coupling's offsets are re-estimated under the new mountings, so
-      // the two never both absorb the same constant (heading_coupling.hpp).
-      if (opt_.heading_coupling.enabled) coupling_.rebase(previous, calib_);
-      ++calib_revision_;
-      for (int i = 0; i < kSegmentCount; ++i)
-        if (live[i]) q_earth_[i] = calib_.segment_from_sensor(i, q_es_[i]);
-    }
-  }
-  // Heading coupling at the hinges: measured on the calibrated orientations, applied on top.
-  if (opt_.heading_coupling.enabled && calib_.valid) {
-    std::array<bool, kSegmentCount> disturbed{};
-    for (int i = 0; i < kSegmentCount; ++i)
-      disturbed[i] = (in_flags_[i] & kSegMagDisturbed) != 0;
-    coupling_.update(q_earth_, fresh, disturbed, t_now_ns);
-    for (int i = 0; i < kSegmentCount; ++i)
-      if (live[i]) q_earth_[i] = coupling_.apply(i, q_earth_[i]);
-  }
   // 2. Segments without (live) sensor, in depth-first order: slerp from the parent towards the
   //    tracked segment further down the chain, or copy the parent.
   for (int i = 0; i < kSegmentCount; ++i) {
@@ -159,7 +111,7 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
       q_earth_[i] = q_earth_[p];
     }
   }
-  // 3. Joint rotations and limits (parents first, so clamping propagates).
+  // 3. Joint rotations and their limits (reported, never imposed).
   const double dt_s =
       frame_ == 0 ? 0.0 : std::max(0.0, static_cast<double>(t_now_ns - t_prev_solve_ns_) * 1e-9);
   const double alpha =
@@ -172,17 +124,7 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
       continue;
     }
     q_joint_[i] = (q_earth_[p].conjugate() * q_earth_[i]).normalized();
-    if (opt_.limit_policy == LimitPolicy::clamp) {
-      Eigen::Quaterniond qc;
-      checks_[i] = check_joint(limits_.joint[i], q_joint_[i], &qc);
-      if (checks_[i].violated) {
-        q_joint_[i] = qc;
-        q_earth_[i] = (q_earth_[p] * qc).normalized();
-        flags[i] |= kSegClamped;
-      }
-    } else {
-      checks_[i] = check_joint(limits_.joint[i], q_joint_[i], nullptr);
-    }
+    checks_[i] = check_joint(limits_.joint[i], q_joint_[i], nullptr);
     if (checks_[i].violated) flags[i] |= kSegLimitViolated;
     viol_avg_[i] += alpha * (checks_[i].violation_deg - viol_avg_[i]);
   }

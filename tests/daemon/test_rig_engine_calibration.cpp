@@ -87,7 +87,7 @@ void drive(RigEngine& engine, sim::Performer& perf, double end_s, double capture
   }
 }
 
-TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
+TEST(DaemonCalibrationFile, CalibrationIsSavedAndReloaded) {
   const fs::path file =
       fs::temp_directory_path() / ("mocap-refined-calib-" + std::to_string(getpid()) + ".toml");
   fs::remove(file);
@@ -116,32 +116,17 @@ TEST(DaemonCalibrationFile, RefinedCalibrationIsSavedAndReloaded) {
     if (npose_text.empty() && fs::exists(file)) npose_text = read_text(file);
   });
   ASSERT_FALSE(npose_text.empty()) << engine.last_calibration_message();
-  // The walk identified the knees: the calibration in use differs from the N-pose one ...
-  EXPECT_GE(engine.skeleton().hinge_refiner().valid_hinges(), 2);
-  // The status reports it: the capture's outcome and each knee's mounting identified.
+  // The status reports the capture's outcome, with how far the performer stood from the pose.
   const CalibrationProgress progress = engine.calibration_progress();
-  EXPECT_EQ(std::string(progress.message.data()).rfind("calibrated in npose", 0), 0u)
-      << progress.message.data();
-  EXPECT_TRUE(progress.refining);
-  EXPECT_EQ(progress.needed_travel_deg, 150.0f);
-  for (const auto& m : progress.mountings) {
-    if (m.segment != index(Segment::shank_l) && m.segment != index(Segment::shank_r)) continue;
-    EXPECT_TRUE(m.identified) << kSegmentNames[m.segment];
-    EXPECT_GT(m.travel_deg, 150.0f);
-  }
-  const Calibration npose = parse_calibration(npose_text);
-  const Calibration& in_use = engine.skeleton().calibration();
-  EXPECT_GT(max_quat_diff(npose, in_use), 1e-3);
-  // ... and the file holds the refined one (the last change is at most kSaveRefinedEveryS old:
-  // one more frame after that interval saves it).
-  const int64_t later_ns =
-      static_cast<int64_t>((end_s + RigEngine::kSaveRefinedEveryS + 0.01) * 1e9);
-  engine.build_frame(later_ns, frame);
-  engine.flush_calibration_file();
+  const std::string message = progress.message.data();
+  EXPECT_EQ(message.rfind("calibrated in npose", 0), 0u) << message;
+  EXPECT_NE(message.find("furthest from the npose"), std::string::npos) << message;
+  // The walk after it leaves the calibration as captured (the solve never changes it), and the
+  // file holds it.
   const Calibration saved = load_calibration(file.string());
+  EXPECT_EQ(parse_calibration(npose_text).heading_deg, saved.heading_deg);
   EXPECT_LT(max_quat_diff(saved, engine.skeleton().calibration()), 1e-12);
-  EXPECT_NEAR(saved.heading_deg, engine.skeleton().calibration().heading_deg, 1e-9);
-  // A restart loads the refined calibration.
+  // A restart loads it.
   RigEngine restarted(cfg);
   EXPECT_LT(max_quat_diff(restarted.skeleton().calibration(), saved), 1e-12);
   fs::remove(file);
@@ -229,27 +214,6 @@ double joint_rmse_deg(const char* motion, uint64_t seed, Segment joint, Setup se
   return n ? std::sqrt(sum_sq / n) / kRadPerDeg : 1e9;
 }
 
-// RMS wrist_l error of a squat, seed 4 (the wrist whose hand and forearm magnetometers'
-// hard-iron residuals drift apart as the arms rise); relative_mag_heading as given.
-double squat_wrist_rmse_deg(bool relative_mag_heading) {
-  return joint_rmse_deg(
-      "squat", 4, Segment::hand_l,
-      [&](Config& cfg, sim::Performer&) {
-        cfg.calibration.relative_mag_heading = relative_mag_heading;
-      },
-      [&](RigEngine& engine) {
-        EXPECT_EQ(engine.skeleton().options().relative_mag_heading.enabled, relative_mag_heading);
-      });
-}
-
-TEST(DaemonRelativeMagHeading, WristFollowsTheGyrosThroughTheRigEngine) {
-  const double on = squat_wrist_rmse_deg(true), off = squat_wrist_rmse_deg(false);
-  std::printf("wrist_l RMSE with/without the smoothing: %.2f / %.2f deg\n", on, off);
-  // Measured: 0.92 deg with the smoothing, 2.97 without (the bench: 1.08 / 3.06).
-  EXPECT_LT(on, 2.0);
-  EXPECT_GT(off, on + 1.0);
-}
-
 // Each sensor's gyr_scale from its one-time table-spin calibration (filt::estimate_gyro_scale on
 // the virtual sensor's spins) reaches the filters and the skeleton: the left hip after the turn
 // motion's 180 deg turns (seed 2, the closest cell of the accuracy grid), where the gyros' scale
@@ -266,11 +230,10 @@ TEST(DaemonGyroScale, TableSpinCalibrationKeepsTheHipThroughTurns) {
           }
         },
         [&](RigEngine& engine) {
-          // Every sensor's segment is marked calibrated for the heading smoothing, or none.
-          const auto& marked =
-              engine.skeleton().options().relative_mag_heading.gyro_scale_calibrated;
+          // Every sensor's scale reaches the tracker.
           for (int i = 0; i < sim::Performer::kSensorCount; ++i)
-            EXPECT_EQ(marked[index(sim::Performer::sensor_segment(i))], calibrated) << i;
+            EXPECT_EQ(engine.tracker().sensor(i).gyr_scale != Eigen::Vector3d::Ones(), calibrated)
+                << i;
         });
   };
   const double on = hip(true), off = hip(false);
@@ -286,12 +249,12 @@ namespace mocap::daemon {
 namespace {
 
 // The configured body reaches the pose: a forearm override sets the elbow-to-wrist distance of
-// the streamed positions, and a tightened left-knee limit flags (and clamps) the squat's left
+// the streamed positions, and a tightened left-knee limit flags (never clamps) the squat's left
 // knee while the right knee, under the default limit, stays inside it.
 TEST(DaemonBody, ConfiguredSegmentsAndJointLimitsReachThePose) {
   ConfigErrors errs;
   std::optional<Config> parsed = parse_config(
-      "[body]\nenforce_limits = false\n[body.segment.hand_l]\njoint_offset_m = [0, 0, -0.40]\n"
+      "[body.segment.hand_l]\njoint_offset_m = [0, 0, -0.40]\n"
       "[body.joint.knee_l]\nb_deg = [-5, 60]\n",
       "<test>", {}, errs);
   ASSERT_TRUE(parsed) << errs.to_string();

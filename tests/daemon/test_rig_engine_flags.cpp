@@ -69,34 +69,5 @@ TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
     EXPECT_FALSE(engine.sensor_state(i).mag_no_reference) << i;
 }
 
-TEST(DaemonMagFlags, MagnetAtTheStartGetsTheRigsReference) {
-  std::optional<Config> cfg = performer_rig();
-  ASSERT_TRUE(cfg);
-  sim::PerformerParams pp;
-  pp.motion = "walk";
-  pp.field.dipoles = sim::disturbance_preset("magnet", pp.height_m);
-  sim::Performer perf(pp);
-  RigEngine engine(*cfg);
-  std::vector<ImuSample> samples;
-  for (int k = 1; k <= 1000; ++k) {  // 10 s at 100 Hz: standing, then walking away
-    samples.clear();
-    perf.step_to(static_cast<int64_t>(k) * 10'000'000, samples);
-    for (const ImuSample& s : samples)
-      engine.on_sample(s.sensor_id, s);
-  }
-  const double earth_uT = pp.field.earth_field_uT().norm();
-  int imposed = 0;
-  for (int i = 0; i < sim::Performer::kSensorCount; ++i) {
-    const AttitudeFilter& f = engine.filter(i);
-    // Every filter ends with the earth field's norm as its reference ...
-    EXPECT_NEAR(f.mag_reference_norm_uT(), earth_uT, 0.1 * earth_uT)
-        << sim::Performer::sensor_name(i);
-    imposed += f.mag_reference_imposed();
-  }
-  // ... some of them because the rig imposed it (they started beside the magnet), not all.
-  EXPECT_GE(imposed, 1);
-  EXPECT_LE(imposed, sim::Performer::kSensorCount / 2);
-}
-
 }  // namespace
 }  // namespace mocap::daemon

@@ -92,10 +92,10 @@ TEST(Skeleton, UntrackedSegmentsAreInterpolatedOrFollowTheParent) {
   EXPECT_EQ(f.segment_flags[index(Segment::pelvis)] & kSegTracked, uint32_t{kSegTracked});
 }
 
-TEST(Skeleton, ReportsOrClampsViolations) {
-  for (LimitPolicy policy : {LimitPolicy::report, LimitPolicy::clamp}) {
+// Limits are reported, never imposed: the pose follows the sensors.
+TEST(Skeleton, ReportsViolationsWithoutChangingThePose) {
+  {
     SkeletonOptions o;
-    o.limit_policy = policy;
     Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full(), o);
     for (int s = 0; s < kSegmentCount; ++s)
       sk.set_sensor_orientation(s, Eigen::Quaterniond::Identity(), 0);
@@ -107,15 +107,8 @@ TEST(Skeleton, ReportsOrClampsViolations) {
     EXPECT_NEAR(f.joint_violation_deg[k], 30, 1e-3);
     EXPECT_TRUE(f.segment_flags[k] & kSegLimitViolated);
     EXPECT_EQ(f.joint_violation_deg[index(Segment::shank_r)], 0);
-    if (policy == LimitPolicy::clamp) {
-      EXPECT_TRUE(f.segment_flags[k] & kSegClamped);
-      EXPECT_NEAR(angle_between_deg(sk.q_earth_segment()[k], axis_rotation(1, -5 * kDegToRad)), 0,
-                  1e-6);
-    } else {
-      EXPECT_FALSE(f.segment_flags[k] & kSegClamped);
-      EXPECT_NEAR(angle_between_deg(sk.q_earth_segment()[k], axis_rotation(1, -35 * kDegToRad)), 0,
-                  1e-6);
-    }
+    EXPECT_NEAR(angle_between_deg(sk.q_earth_segment()[k], axis_rotation(1, -35 * kDegToRad)), 0,
+                1e-6);
     // The drift signal accumulates while the violation persists.
     for (int t = 1; t <= 200; ++t) {
       sk.set_sensor_orientation(k, axis_rotation(1, -35 * kDegToRad), t * 20 * kMs);
@@ -179,9 +172,7 @@ TEST(Skeleton, DeterministicBitIdenticalFrames) {
   for (int k = 0; k < 50; ++k)
     poses.push_back(test::random_pose(rng, 70));
   auto run = [&](std::vector<PoseFrame>& out) {
-    SkeletonOptions o;
-    o.limit_policy = LimitPolicy::clamp;
-    Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full(), o);
+    Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full());
     for (size_t k = 0; k < poses.size(); ++k) {
       for (int s = 0; s < kSegmentCount; ++s)
         sk.set_sensor_orientation(s, poses[k][s], static_cast<int64_t>(k) * 10 * kMs);

@@ -142,7 +142,7 @@ int run_replay(int argc, char** argv) {
     cfg.calibration.file.clear();
     RigEngine engine(cfg);
     if (const std::string ct = src->calibration_text(); !ct.empty() && !opt.calibrate_pose)
-      engine.skeleton().set_calibration(parse_calibration(ct, input + " (calibration)"));
+      engine.tracker().set_calibration(parse_calibration(ct, input + " (calibration)"));
     PipelineCore core(cfg.pipeline, cfg.calibration, sensor_infos(cfg), engine);
     core.set_frame_flag(kFrameReplay, true);
     std::unique_ptr<BvhSink> bvh;

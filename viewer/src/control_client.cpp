@@ -44,23 +44,7 @@ std::string calibration_prompt(const std::string& status_reply_json) {
   };
   const std::string message = c.value("message", std::string());
   if (!j.value("calibrated", false)) return message.empty() ? "" : "CALIBRATION: " + upper(message);
-  if (!c.value("refining", false)) return "";
-  std::string todo;
-  bool knees = false, arms = false;
-  for (const auto& m : c.value("mountings", nlohmann::json::array())) {
-    if (!m.is_object() || m.value("identified", false)) continue;
-    const std::string seg = m.value("segment", std::string());
-    (seg.rfind("shank", 0) == 0 ? knees : arms) = true;
-    char part[96];
-    std::snprintf(part, sizeof part, "  %s %.0f/%.0f DEG", upper(seg).c_str(),
-                  m.value("travel_deg", 0.0), c.value("needed_travel_deg", 0.0));
-    todo += part;
-  }
-  if (todo.empty()) return "";
-  std::string what = knees && arms ? "BEND THE KNEES, CURL THE ELBOWS"
-                     : knees       ? "BEND THE KNEES"
-                                   : "CURL THE ELBOWS";
-  return "CALIBRATION MOVES: " + what + todo;
+  return "";
 }
 
 std::string fetch_calibration_prompt(const std::string& socket_path, int timeout_ms) {

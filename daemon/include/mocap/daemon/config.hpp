@@ -56,8 +56,7 @@ struct BodyConfig {
   /// Joint limits: the anatomical defaults, then the `joint_limits` file's [joint.NAME]
   /// overrides (as config/body/joint_limits.toml), then the inline [body.joint.NAME] tables.
   JointLimits limits = default_joint_limits();
-  bool enforce_limits = true;  ///< clamp joints to their limits
-  bool root_motion = true;     ///< stance-foot root translation
+  bool root_motion = true;  ///< stance-foot root translation
 };
 
 struct CalibrationConfig {
@@ -65,16 +64,6 @@ struct CalibrationConfig {
   double countdown_s = 3.0;    ///< seconds from the command to the capture
   double capture_s = 1.0;      ///< seconds averaged during the capture
   std::string file;            ///< saved calibration loaded at start, written after each one
-  /// Refine the calibration from knee/elbow motion after it (skeleton/hinge_calibration.hpp):
-  /// each segment's mounting yaw and the body heading. Off: the still pose alone.
-  bool refine_hinges = true;
-  /// Kinematic heading coupling at the knees and elbows (skeleton/heading_coupling.hpp): keeps
-  /// each hinge's two sensors on one heading while their filters' headings drift apart.
-  bool heading_coupling = true;
-  /// Relative magnetometer heading smoothing (skeleton/relative_mag_heading.hpp): each
-  /// sensor's magnetometer heading correction relative to the pelvis sensor's is low-passed, so
-  /// joint rotations follow the gyros in the short term.
-  bool relative_mag_heading = true;
   /// Where the calibration's body heading comes from: "mount_normals" (every sensor lies flat
   /// on its site with z out of the skin; the heading is the circular mean over the sites'
   /// normals, so one sensor's misalignment counts 1/N), "pelvis_sensor" (the pelvis sensor's
@@ -171,6 +160,9 @@ struct ConfigError {
 /// Thrown by load_config when the configuration is not valid; holds every problem found.
 struct ConfigErrors {
   std::vector<ConfigError> errors;
+  /// Keys of removed features, accepted and ignored so that older configs and recordings still
+  /// load: one line each naming the key (printed by mocapd; not an error).
+  std::vector<std::string> warnings;
   std::string to_string() const;  ///< one line per error
 };
 

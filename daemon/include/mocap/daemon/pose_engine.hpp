@@ -20,17 +20,7 @@ using CalibrationPose = mocap::CalibrationPose;
 /// motion-identified mounting (knees, elbows, hands through the elbows). Fixed size: the
 /// pipeline copies it with every status snapshot.
 struct CalibrationProgress {
-  struct Mounting {
-    int8_t segment = -1;      ///< the segment whose mounting yaw the motion identifies
-    bool tracked = false;     ///< the rig has sensors on the segments this needs
-    bool identified = false;  ///< enough flexion seen and the fit well-conditioned
-    float travel_deg = 0;     ///< flexion travel seen so far
-    float yaw_deg = 0;        ///< the identified correction of its mounting yaw
-  };
-  std::array<char, 160> message{};  ///< last capture's outcome, NUL-terminated ("" if none)
-  bool refining = false;            ///< refinement from motion is on and has a calibration
-  float needed_travel_deg = 0;      ///< travel a hinge needs to be identified
-  std::array<Mounting, 6> mountings{};
+  std::array<char, 256> message{};  ///< last capture's outcome, NUL-terminated ("" if none)
 };
 
 /// What an engine knows about one sensor's filter (for health reports).

@@ -1,41 +1,38 @@
-// The real PoseEngine: one AttitudeFilter per sensor, the skeleton's Calibrator for N-/T-pose
-// captures, and the Skeleton solver (forward kinematics, joint limits, root motion). The
-// calibration in use (the pose capture refined from knee/elbow motion, heading resets) is saved
-// to calibration.file whenever it changes, at most every kSaveRefinedEveryS of sample time, by
-// a writer thread (CalibrationSaver): the pipeline never waits for the disk.
+// The daemon's PoseEngine: a rig config turned into the one body tracker (rig::BodyTracker),
+// plus what only a running daemon needs: the calibration file (loaded at start, saved by a
+// writer thread, CalibrationSaver, whenever the calibration in use changes; the pipeline never
+// waits for the disk), log lines and the status's calibration message.
 #pragma once
 
 #include <cstdint>
 #include <memory>
-#include <optional>
 #include <string>
-#include <vector>
 
 #include "mocap/daemon/calibration_saver.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/pose_engine.hpp"
-#include "mocap/filter/attitude_filter.hpp"
-#include "mocap/filter/rig_field_consensus.hpp"
-#include "mocap/skeleton/calibration.hpp"
-#include "mocap/skeleton/skeleton.hpp"
+#include "mocap/rig/body_tracker.hpp"
 
 namespace mocap::daemon {
 
 /// The filter parameters of a config (filter.* keys applied to the defaults).
 FilterParams filter_params(const FilterConfig& f);
+/// The body tracker's sensors and options for a rig config.
+std::vector<rig::TrackerSensor> tracker_sensors(const Config& cfg);
+rig::TrackerOptions tracker_options(const Config& cfg);
 
 class RigEngine final : public PoseEngine {
  public:
-  static constexpr double kSaveRefinedEveryS = 5.0;
+  static constexpr double kSaveEveryS = 5.0;  ///< at most one calibration save per this
 
-  /// Builds filters and skeleton for the config's sensors; loads calibration.file if it exists.
+  /// Builds the tracker for the config's sensors; loads calibration.file if it exists.
   /// Throws std::runtime_error on an unreadable calibration or body file.
   explicit RigEngine(const Config& cfg, Logger* log = nullptr);
   /// Writes a calibration still waiting for the disk.
   ~RigEngine() override;
 
   void on_sample(int sensor_index, const ImuSample& sample) override;
-  void set_sensor_live(int, bool) override {}
+  void set_sensor_live(int sensor_index, bool live) override;
   void build_frame(int64_t t_ns, PoseFrame& out) override;
   SensorFilterState sensor_state(int sensor_index) const override;
   CalibrationProgress calibration_progress() const override;
@@ -44,21 +41,16 @@ class RigEngine final : public PoseEngine {
 
   /// The outcome of the last calibration capture ("" while none finished).
   const std::string& last_calibration_message() const { return calib_message_; }
-  Skeleton& skeleton() { return skeleton_; }
-  const AttitudeFilter& filter(int sensor) const { return filters_[sensor]; }
+  rig::BodyTracker& tracker() { return tracker_; }
+  const Skeleton& skeleton() const { return tracker_.skeleton(); }
+  const AttitudeFilter& filter(int sensor) const { return tracker_.filter(sensor); }
   /// Blocks until every calibration handed to the writer thread so far is on disk.
   void flush_calibration_file();
 
  private:
   Config cfg_;
   Logger* log_;
-  std::vector<AttitudeFilter> filters_;
-  filt::RigFieldConsensus consensus_;  ///< reference field shared by the rig's sensors
-  std::vector<int> segment_of_;
-  std::vector<Eigen::Vector3d> gyr_scale_;  ///< per sensor: [[sensor]] gyr_scale, or 1
-  Skeleton skeleton_;
-  Calibrator calibrator_;
-  int64_t newest_t_ns_ = 0;
+  rig::BodyTracker tracker_;
   std::string calib_message_;
   uint64_t saved_revision_ = 0;     ///< skeleton calibration revision last saved (or loaded)
   int64_t saved_t_ns_ = INT64_MIN;  ///< sample time of that save

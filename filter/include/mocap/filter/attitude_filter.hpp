@@ -122,17 +122,6 @@ struct FilterParams {
   /// field, as a heading angle) relative to heading_sigma_deg, squared and times this weight,
   /// adds to the heading's soft-trust score: the heading follows a corrected field more slowly.
   double hard_iron_trust_weight = 0.0;  // off: slower heading costs more (gyro drift) on BROAD
-  /// anchor_heading(): largest offset change (x F) taken as present at the anchor.
-  double anchor_max_offset = 0.08;
-  /// anchor_heading() while the field is untrusted (disturbed or no reference) and not like the
-  /// reference (norm/dip beyond the thresholds): the calibration took a bent heading. It is
-  /// held (gyro only) until the field is trusted; then, over anchor_trust_avg_s of trusted
-  /// samples (within anchor_trust_max_dev of the reference: squared deviation in units of the
-  /// thresholds, as the soft trust), the running mean of the field's heading error goes into the
-  /// anchor (heading still held) instead of turning the heading. 0 = off (the field corrects
-  /// it). Long, because a magnet's gradient can bend the direction where norm and dip look right.
-  double anchor_trust_avg_s = 20.0;
-  double anchor_trust_max_dev = 0.25;
   // --- magnetometer latency (ours) ---
   /// A magnetometer often samples the motion later than the gyro (longer integration,
   /// internal filters): during fast rotation its heading then lags. The latency is
@@ -248,20 +237,6 @@ struct FilterState {
   int hi_restarts_seen = 0;    ///< its restart count then
   Eigen::Vector3d hi_applied_uT = Eigen::Vector3d::Zero();  ///< offset subtracted
   bool hi_applied_consistent = false;                       ///< ... by the consistency path
-  // heading anchor (anchor_heading(): a calibration was taken at this moment)
-  bool anchor_set = false;
-  Eigen::Quaterniond q_anchor = Eigen::Quaterniond::Identity();  ///< 9D orientation then
-  Eigen::Vector3d anchor_offset_uT = Eigen::Vector3d::Zero();    ///< offset applied then
-  double anchor_heading_rad = 0;  ///< heading the offset learnt since caused at q_anchor
-  int anchor_restarts = 0;        ///< estimator restarts then (a restart since: new offset)
-  // trust anchor (anchor_heading() while the field was untrusted; set when it is trusted again)
-  bool anchor_trust_pending = false;
-  bool anchor_trust_armed = false;  ///< anchor_heading() was called while untrusted
-  double anchor_trust_rad = 0;      ///< heading error kept (added to every measurement)
-  int anchor_trust_n = 0;
-  double anchor_trust_t_s = 0;
-  double anchor_cal_norm = 0, anchor_cal_dip = 0;  ///< field (norm uT, dip rad) at the call
-  bool ref_imposed = false;  ///< the reference field was set by set_reference_field()
 };
 
 /// Everything a consumer reads after an update, in one plain struct (AttitudeFilter::output()).
@@ -320,15 +295,6 @@ class AttitudeFilter {
   /// The current (smoothed) field's norm, uT, and dip, rad, in the 6D frame.
   double mag_field_norm_uT() const { return st_.mag_norm_dip[0]; }
   double mag_field_dip_rad() const { return st_.mag_norm_dip[1]; }
-  /// Imposes the reference field from outside (the rig's consensus, filt::RigFieldConsensus:
-  /// every sensor on one body sees the same earth field). Ends the start-up like an accepted
-  /// reference; if the current field does not match it the sensor is disturbed at once (gyro
-  /// only) and its own candidate must be earned again while rotating. Not per sample: called
-  /// at a low rate, only when the reference differs.
-  void set_reference_field(double norm_uT, double dip_rad);
-  /// The reference was imposed by set_reference_field() (and not replaced since by the
-  /// filter's own acceptance of a new field).
-  bool mag_reference_imposed() const { return st_.ref_imposed; }
   /// Hard-iron offset currently subtracted from the magnetometer, uT (sensor frame).
   Eigen::Vector3d hard_iron_uT() const { return st_.hi_applied_uT; }
   /// Largest one-sigma of the hard-iron estimate over all directions, uT.
@@ -340,23 +306,6 @@ class AttitudeFilter {
   /// One-sigma heading uncertainty of the 9D output, rad (large before any magnetometer).
   double heading_sigma_rad() const;
 
-  /// Heading anchor for a consumer that has just taken a calibration from this filter's
-  /// orientation (N-pose): that calibration absorbed the heading error the magnetometer's
-  /// then-unknown hard-iron offset caused in this pose. When the offset is learnt later the
-  /// heading becomes right and the calibration wrong by that error; from this call on the
-  /// 9D heading keeps it: c = the heading error the offset learnt since this call causes at
-  /// this call's orientation is added to every heading measurement (a constant for a constant
-  /// offset, so orientation-dependent errors are still removed; at the anchor pose learning
-  /// the offset changes nothing). Only the residual path's offset, not while disturbed, not
-  /// above anchor_max_offset; an estimator restart drops c. Calling it again re-anchors.
-  void anchor_heading();
-  void clear_heading_anchor();
-  /// c above, rad (0 without an anchor).
-  double anchor_heading_rad() const { return st_.anchor_set ? st_.anchor_heading_rad : 0.0; }
-  /// Heading error kept by the trust anchor (anchor_heading() while the field was untrusted:
-  /// set when the field is first trusted again), rad; pending until then.
-  double anchor_trust_rad() const { return st_.anchor_trust_rad; }
-  bool anchor_trust_pending() const { return st_.anchor_trust_pending; }
 
   FilterState state() const { return st_; }
   void set_state(const FilterState& s);
@@ -368,7 +317,6 @@ class AttitudeFilter {
   void update_gyr(const Eigen::Vector3d& gyr, double dt_s);
   void update_acc(const Eigen::Vector3d& acc, double dt_s);
   void update_mag(const Eigen::Vector3d& mag, double dt_s);
-  void update_anchor();
   void end_mag_startup();
   void select_hard_iron(const Eigen::Vector3d& m_raw_e, const Eigen::Vector3d& m_corr_e);
   /// Squared deviation of a field (norm, dip) from a reference, in units of the disturbance

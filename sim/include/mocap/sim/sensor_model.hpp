@@ -14,6 +14,7 @@
 
 #include "mocap/core/imu_sample.hpp"
 #include "mocap/core/segments.hpp"
+#include "mocap/sim/body_pose.hpp"
 #include "mocap/skeleton/body_model.hpp"
 
 namespace mocap::sim {
@@ -45,8 +46,14 @@ struct SensorModelParams {
 
 /// A magnetic dipole near the performer (a magnet, or the induced field of steel furniture).
 struct MagneticDipole {
+  /// Position in the earth frame; for a carried dipole, in its segment's frame.
   Eigen::Vector3d p_earth_m = Eigen::Vector3d::Zero();
+  /// Moment in the earth frame; for a carried dipole, in its segment's frame.
   Eigen::Vector3d moment_A_m2 = Eigen::Vector3d::Zero();
+  /// Present only in [t_begin_s, t_end_s) of the motion's time (default: always).
+  double t_begin_s = -1e300, t_end_s = 1e300;
+  /// Carried by this segment (a magnet held against a limb), or -1: fixed in the room.
+  int carried_by_segment = -1;
 };
 
 /// Earth field (ENU) with inclination (dip) and declination, plus local dipoles.
@@ -57,15 +64,21 @@ struct MagneticFieldParams {
   std::vector<MagneticDipole> dipoles;
 
   Eigen::Vector3d earth_field_uT() const;
-  /// Total field at a point, earth frame, microtesla.
-  Eigen::Vector3d field_uT(const Eigen::Vector3d& p_earth_m) const;
+  /// Total field at a point, earth frame, microtesla, at motion time t_s; `body` (the truth at
+  /// t_s) places the carried dipoles (ignored without it).
+  Eigen::Vector3d field_uT(const Eigen::Vector3d& p_earth_m, double t_s = 0,
+                           const TruthFrame* body = nullptr) const;
+  /// A dipole carried by a segment or present for a time only.
+  bool time_varying() const;
 };
 
 /// Named disturbance sets placed around the performer's start position (pelvis at the origin,
 /// facing +x): "none", "magnet" (a strong magnet at the right hip, 15 cm from the hanging right
 /// hand), "desk" (a steel desk in front, the induced field of its frame under the reaching hands),
-/// "both". Throws std::invalid_argument for other names.
-std::vector<MagneticDipole> disturbance_preset(std::string_view name, double height_m);
+/// "both", "arm_magnet" (a 0.3 A m^2 magnet held 10 cm from the right forearm's sensor, moving
+/// with the arm, for 6 s from t_begin_s). Throws std::invalid_argument for other names.
+std::vector<MagneticDipole> disturbance_preset(std::string_view name, double height_m,
+                                               double t_begin_s = 0);
 
 /// Where and how one sensor is strapped to its segment.
 struct SensorMount {

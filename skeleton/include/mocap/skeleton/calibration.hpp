@@ -100,6 +100,11 @@ struct CalibratorOptions {
   /// mount_normals: the outward normal of each segment's sensor site in the body frame (in the
   /// calibration pose); zero = unknown (segment not used for the heading).
   std::array<Eigen::Vector3d, kSegmentCount> mount_normal_body{};
+  /// 6D rigs: each sensor's filter has a heading frame of its own (no magnetometer). With
+  /// mount_normals every sensor's heading is then aligned on its own from its site's normal
+  /// (q_correction); a segment whose site normal is near vertical (head, feet) takes the
+  /// alignment of the nearest segment above it that has one.
+  bool independent_headings = false;
 };
 
 enum class CalibrationStatus : uint8_t {
@@ -114,6 +119,10 @@ struct CalibrationResult {
   std::array<double, kSegmentCount> motion_deg{};         ///< per-segment RMS spread
   std::array<double, kSegmentCount> gravity_error_deg{};  ///< per-segment, -1 without acc
   std::array<int, kSegmentCount> samples{};
+  /// How far each segment was from the assumed pose where its site normal shows it: the tilt
+  /// of the normal against the pose's, degrees (-1: not observable). Reported, not refused: a
+  /// constant offset does not change the tracked motion.
+  std::array<double, kSegmentCount> pose_deviation_deg{};
   std::string message;  ///< human-readable verdict naming the offending segments
   bool ok() const { return status == CalibrationStatus::ok; }
 };

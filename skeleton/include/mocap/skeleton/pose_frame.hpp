@@ -20,7 +20,7 @@ enum SegmentFlag : uint32_t {
   kSegStale = 1u << 2,          ///< its sensor is silent (last sample too old)
   kSegMagDisturbed = 1u << 3,   ///< its sensor's magnetometer is rejected as disturbed
   kSegLimitViolated = 1u << 4,  ///< its joint (to the parent) is outside the limits
-  kSegClamped = 1u << 5,        ///< its joint was clamped to the nearest allowed pose
+  // 1u << 5 is free (it meant "clamped" while joint limits could be imposed).
   kSegAtRest = 1u << 6,         ///< its sensor is at rest
   kSegStance = 1u << 7,         ///< foot segments: this foot is the stance foot
   /// Its sensor's filter has not accepted a reference field yet (start-up): the heading follows

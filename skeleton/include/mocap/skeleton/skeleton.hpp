@@ -1,10 +1,12 @@
 // The skeleton solver: per-segment earth-frame sensor orientations in, a whole-body posture
 // (PoseFrame) out. Forward kinematics as in the thesis's Figure 29: each segment's orientation
-// comes from its own sensor (through the calibration), positions follow the parent chain by the
-// joint offsets; segments without a sensor are interpolated between tracked neighbours along
-// their chain (e.g. torso between pelvis and neck) or follow their parent. Joint rotations are
-// checked against swing-twist/hinge limits (reported, optionally clamped); the root moves with
-// the stance foot or is pinned.
+// comes from its own sensor through the calibration (q_correction q_earth_sensor
+// q_sensor_segment, nothing else: a segment is never worse than its own sensor's filter);
+// positions follow the parent chain by the joint offsets; segments without a sensor are interpolated between tracked neighbours
+// along their chain (e.g. torso between pelvis and neck) or follow their parent. Joint rotations
+// are checked against swing-twist/hinge limits and violations reported per joint, never clamped
+// (real people exceed textbook ranges: docs/skeleton.md); the root moves with the stance foot or
+// is pinned. The solve never changes the calibration; only set_calibration and reset_heading do.
 //
 // Per-frame work (set_sensor_orientation, solve) never allocates, and is deterministic: identical
 // inputs give bit-identical frames.
@@ -17,41 +19,20 @@
 
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
-#include "mocap/skeleton/heading_coupling.hpp"
-#include "mocap/skeleton/hinge_calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
-#include "mocap/skeleton/relative_mag_heading.hpp"
 #include "mocap/skeleton/rig.hpp"
 #include "mocap/skeleton/root_motion.hpp"
 
 namespace mocap {
 
-enum class LimitPolicy : uint8_t {
-  report,  ///< report violations only, the pose follows the sensors
-  clamp,   ///< replace each violating joint rotation by the nearest allowed one
-};
-
 struct SkeletonOptions {
-  LimitPolicy limit_policy = LimitPolicy::report;
   RootMotionOptions root{};
   /// A segment whose newest sample is older than this (relative to the newest of all) is stale:
   /// its last orientation is held and kSegStale set.
   int64_t stale_after_ns = 200'000'000;
   /// Time constant of the per-joint violation average (the drift signal), seconds.
   double violation_tau_s = 2.0;
-  /// Refinement of the calibration's per-segment heading from knee/elbow motion after a
-  /// calibration (hinge_calibration.hpp). Off by default here; the daemon and the accuracy
-  /// benchmark turn it on.
-  HingeRefineOptions hinge_refine{.enabled = false};
-  /// Heading coupling at the knees and elbows (heading_coupling.hpp): each hinge child's heading
-  /// follows its parent's through the hinge constraint. Off by default here; the daemon and the
-  /// accuracy benchmark set it from their configuration.
-  HeadingCouplingOptions heading_coupling{};
-  /// Relative magnetometer heading smoothing (relative_mag_heading.hpp): joint rotations follow
-  /// the gyros in the short term. Off by default here; the daemon and the accuracy benchmark
-  /// set it from their configuration. Needs each sample's mag_heading_rad.
-  RelativeMagHeadingOptions relative_mag_heading{};
 };
 
 class Skeleton {
@@ -59,21 +40,15 @@ class Skeleton {
   Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping rig,
            SkeletonOptions options = {});
 
-  /// Applies a calibration (copies it) and restarts the hinge refinement from it. Without one,
-  /// sensors are taken as aligned with their segments (q_sensor_segment = identity).
+  /// Applies a calibration (copies it). Without one, sensors are taken as aligned with their
+  /// segments (q_sensor_segment = identity).
   void set_calibration(const Calibration& c);
-  /// The calibration in use: the one set, refined by hinge motion when enabled (save this one).
+  /// The calibration in use (save this one).
   const Calibration& calibration() const { return calib_; }
-  /// Counts every change of calibration() (set, heading reset, refinement): a caller that saves
-  /// the calibration compares it with the value at its last save.
+  /// Counts every change of calibration() (set, heading reset): a caller that saves the
+  /// calibration compares it with the value at its last save.
   uint64_t calibration_revision() const { return calib_revision_; }
   void clear_calibration() { set_calibration(Calibration{}); }
-  /// The hinge refinement's state (yaw offsets found so far, per-hinge estimates).
-  const HingeAxisRefiner& hinge_refiner() const { return refiner_; }
-  /// The heading coupling's state (per-hinge corrections).
-  const HeadingCoupling& heading_coupling() const { return coupling_; }
-  /// The relative magnetometer heading smoothing's state (per-segment corrections).
-  const RelativeMagHeading& relative_mag_heading() const { return rel_mag_; }
   /// Heading-only reset from the latest sensor orientations (the person stands facing forward):
   /// every segment takes the pelvis's heading, or `target_heading_deg` when given (0 = face +x).
   void reset_heading(const double* target_heading_deg = nullptr);
@@ -81,15 +56,12 @@ class Skeleton {
   /// it is marked live again. Sensors are live by default.
   void set_sensor_live(int segment, bool live);
 
-  /// Newest orientation of the sensor on `segment` (earth frame). Non-finite or zero quaternions
-  /// are rejected (counted in rejected_samples()). sensor_flags: SegmentFlag bits reported by
-  /// the sensor's filter (kSegAtRest, kSegMagDisturbed), passed through to the frame.
-  /// mag_heading_rad: the sensor filter's magnetometer heading correction
-  /// (AttitudeFilter::mag_heading_rad()) for the relative smoothing, which runs from a
-  /// calibration on; NaN = not known (the orientation is used as given).
+  /// Newest orientation of the sensor on `segment` (earth frame) at t_ns. Non-finite or zero
+  /// quaternions are rejected (counted in rejected_samples()). sensor_flags: SegmentFlag bits
+  /// reported by the sensor's filter (kSegAtRest, kSegMagDisturbed), passed through to the
+  /// frame.
   void set_sensor_orientation(int segment, const Eigen::Quaterniond& q_earth_sensor, int64_t t_ns,
-                              uint32_t sensor_flags = 0,
-                              double mag_heading_rad = std::numeric_limits<double>::quiet_NaN());
+                              uint32_t sensor_flags = 0);
 
   /// Solves the posture at the newest sample time. Fills every skeleton field of `out`
   /// (frame, t_ns, calibrated flag, orientations, positions, joint rotations, violations,
@@ -120,12 +92,8 @@ class Skeleton {
   JointLimits limits_;
   RigMapping rig_;
   SkeletonOptions opt_;
-  Calibration calib_;       ///< in use: calib_base_ refined by the hinge yaw offsets
-  Calibration calib_base_;  ///< as set (plus heading resets)
+  Calibration calib_;  ///< as set (plus heading resets)
   uint64_t calib_revision_ = 0;
-  HingeAxisRefiner refiner_;
-  HeadingCoupling coupling_;
-  RelativeMagHeading rel_mag_;
   RootMotion root_;
 
   // Inputs.

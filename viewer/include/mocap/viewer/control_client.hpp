@@ -24,9 +24,7 @@ struct ControlReply {
 };
 
 /// What the HUD prompts after a calibration, from a `status` reply: the calibration's refusal
-/// reason while uncalibrated after a capture, or, while the calibration moves still have
-/// mountings to identify, what to do and how far each is ("CALIBRATION MOVES: BEND THE KNEES,
-/// CURL THE ELBOWS  KNEE_L 112/150 DEG ..."); "" when there is nothing to say. Upper case (the
+/// reason while uncalibrated after a capture; "" when there is nothing to say. Upper case (the
 /// HUD's font). Never throws.
 std::string calibration_prompt(const std::string& status_reply_json);
 /// Asks the daemon for its status (timeout_ms at most) and returns calibration_prompt() of it;

@@ -1,0 +1,97 @@
+// The body tracker: inertial samples in, a posture out. It owns, in this order per sample:
+//   1. the sensor's gyro scale (its one-time table-spin calibration, divided out),
+//   2. the sensor's AttitudeFilter (9D, or 6D without magnetometers),
+//   3. the calibration capture (N-/T-pose, Calibrator), which turns each sensor's orientation
+//      into its segment's (mounting, and in 6D each sensor's own heading from its site normal),
+//   4. the skeleton's input (orientation, flags, angular rate);
+// and per frame the skeleton solve (each segment holds its sensor's newest orientation).
+//
+// Nothing between the filter and the segment changes a segment's motion: a segment is its own
+// sensor's filter output through a constant calibration, so the body can never make a segment
+// worse than its sensor's filter alone (docs/accuracy.md shows why every body-level correction
+// tried so far was removed). mocapd, mocap replay, mocap bench accuracy and the tests all run
+// this class; it knows no configuration file, clock or thread.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "mocap/core/imu_sample.hpp"
+#include "mocap/filter/attitude_filter.hpp"
+#include "mocap/skeleton/calibration.hpp"
+#include "mocap/skeleton/skeleton.hpp"
+
+namespace mocap::rig {
+
+/// One sensor of the rig.
+struct TrackerSensor {
+  int segment = -1;  ///< segment index it is strapped on, -1: not on the body (filtered only)
+  /// Gyro scale per axis from the sensor's table-spin calibration (1 = uncalibrated).
+  Eigen::Vector3d gyr_scale = Eigen::Vector3d::Ones();
+  /// Outward normal of its site in the body frame (the sensor's z axis lies along it); zero:
+  /// the segment's standard site (skeleton/sensor_sites.hpp).
+  Eigen::Vector3d site_normal_body = Eigen::Vector3d::Zero();
+};
+
+struct TrackerOptions {
+  FilterParams filter;  ///< every sensor's filter parameters
+  /// With magnetometers (9D: one earth frame for all sensors). false: 6D, each filter has a
+  /// heading of its own, aligned at calibration from its site's normal.
+  bool use_mag = true;
+  /// Calibration capture; heading source mount_normals takes the site normals from the sensors.
+  CalibratorOptions calibrator;
+  SkeletonOptions skeleton;
+};
+
+class BodyTracker {
+ public:
+  /// Throws std::invalid_argument for a sensor on a segment index out of range.
+  BodyTracker(const BodyModel& model, const JointLimits& limits, std::vector<TrackerSensor> sensors,
+              TrackerOptions options);
+
+  /// One sample of sensor `i` (its index in the rig). Never allocates.
+  void on_sample(int i, const ImuSample& sample);
+  /// Starts a capture in `pose`; samples from t_start_ns on are averaged. The result is taken
+  /// with take_calibration_result() after the sample that completes it.
+  void start_calibration(CalibrationPose pose, int64_t t_start_ns);
+  bool capturing() const { return calibrator_.capturing(); }
+  double calibration_progress(int64_t t_ns) const { return calibrator_.progress(t_ns); }
+  /// The outcome of a capture that finished since the last call (applied when ok).
+  std::optional<CalibrationResult> take_calibration_result();
+
+  /// Uses a saved calibration.
+  void set_calibration(const Calibration& c) { skeleton_.set_calibration(c); }
+  /// Heading-only reset (the person stands facing forward).
+  void reset_heading() { skeleton_.reset_heading(); }
+  void set_sensor_live(int i, bool live);
+
+  /// The posture at t_ns.
+  void solve(int64_t t_ns, PoseFrame& out) { skeleton_.solve(t_ns, out); }
+
+  const Skeleton& skeleton() const { return skeleton_; }
+  Skeleton& skeleton() { return skeleton_; }
+  const AttitudeFilter& filter(int i) const { return filters_[static_cast<size_t>(i)]; }
+  const TrackerSensor& sensor(int i) const { return sensors_[static_cast<size_t>(i)]; }
+  int sensor_count() const { return static_cast<int>(sensors_.size()); }
+  const TrackerOptions& options() const { return opt_; }
+  /// The sensor's earth-frame orientation as the tracker uses it (9D or 6D output).
+  Eigen::Quaterniond q_earth_sensor(int i) const;
+  /// Newest sample time seen.
+  int64_t newest_t_ns() const { return newest_t_ns_; }
+
+ private:
+  std::vector<TrackerSensor> sensors_;
+  TrackerOptions opt_;
+  std::vector<AttitudeFilter> filters_;
+  Skeleton skeleton_;
+  Calibrator calibrator_;
+  std::optional<CalibrationResult> result_;
+  int64_t newest_t_ns_ = 0;
+};
+
+/// The rig mapping (segment -> sensor index) of a sensor list.
+RigMapping rig_mapping(const std::vector<TrackerSensor>& sensors);
+
+}  // namespace mocap::rig

@@ -1,0 +1,104 @@
+// BodyTracker: gyro scale -> filter -> calibration capture -> skeleton, for one rig.
+#include "mocap/rig/body_tracker.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/skeleton/sensor_sites.hpp"
+
+namespace mocap::rig {
+namespace {
+
+CalibratorOptions calibrator_options(const std::vector<TrackerSensor>& sensors,
+                                     const TrackerOptions& o) {
+  CalibratorOptions c = o.calibrator;
+  c.independent_headings = !o.use_mag;
+  if (c.heading == HeadingSource::mount_normals) {
+    // A sensor lies flat on its site: its z axis is the site's outward normal.
+    c.heading_axis_sensor = Eigen::Vector3d::UnitZ();
+    for (const TrackerSensor& s : sensors) {
+      if (s.segment < 0) continue;
+      c.mount_normal_body[s.segment] =
+          s.site_normal_body.squaredNorm() > 0
+              ? s.site_normal_body.normalized()
+              : standard_site_normal_body(static_cast<Segment>(s.segment));
+    }
+  }
+  return c;
+}
+
+}  // namespace
+
+RigMapping rig_mapping(const std::vector<TrackerSensor>& sensors) {
+  RigMapping r = RigMapping::none();
+  for (size_t i = 0; i < sensors.size(); ++i) {
+    const int seg = sensors[i].segment;
+    if (seg >= kSegmentCount)
+      throw std::invalid_argument("sensor " + std::to_string(i) + ": no segment " +
+                                  std::to_string(seg));
+    if (seg >= 0) r.sensor_for_segment[seg] = static_cast<int>(i);
+  }
+  return r;
+}
+
+BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
+                         std::vector<TrackerSensor> sensors, TrackerOptions options)
+    : sensors_(std::move(sensors)),
+      opt_(std::move(options)),
+      filters_(sensors_.size(), AttitudeFilter(opt_.filter)),
+      skeleton_(model, limits, rig_mapping(sensors_), opt_.skeleton),
+      calibrator_(rig_mapping(sensors_), calibrator_options(sensors_, opt_)) {}
+
+Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
+  const AttitudeFilter& f = filters_[static_cast<size_t>(i)];
+  return opt_.use_mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();
+}
+
+void BodyTracker::on_sample(int i, const ImuSample& in) {
+  if (i < 0 || i >= sensor_count()) return;
+  const TrackerSensor& sensor = sensors_[static_cast<size_t>(i)];
+  AttitudeFilter& f = filters_[static_cast<size_t>(i)];
+  // 1. Gyro scale (1 when uncalibrated); a 6D rig ignores any magnetometer.
+  ImuSample s = in;
+  s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(sensor.gyr_scale);
+  if (!opt_.use_mag) s.valid = static_cast<uint8_t>(s.valid & ~kFieldMag);
+  // 2. Filter.
+  f.update(s);
+  newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
+  const int seg = sensor.segment;
+  if (seg < 0) return;
+  const Eigen::Quaterniond q = q_earth_sensor(i);
+  // 3. Calibration capture.
+  if (calibrator_.capturing()) {
+    calibrator_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
+    if (calibrator_.done(s.t_host_ns)) {
+      result_ = calibrator_.finish();
+      if (result_->ok()) skeleton_.set_calibration(result_->calibration);
+    }
+  }
+  // 4. The segment's input: orientation and the filter's flags.
+  const uint32_t flags = (f.at_rest() ? uint32_t{kSegAtRest} : 0u) |
+                         (opt_.use_mag && f.mag_disturbed() ? uint32_t{kSegMagDisturbed} : 0u) |
+                         (opt_.use_mag && f.mag_no_reference() ? uint32_t{kSegMagNoReference} : 0u);
+  skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags);
+}
+
+void BodyTracker::start_calibration(CalibrationPose pose, int64_t t_start_ns) {
+  result_.reset();
+  calibrator_.start(pose, t_start_ns);
+}
+
+std::optional<CalibrationResult> BodyTracker::take_calibration_result() {
+  std::optional<CalibrationResult> r;
+  r.swap(result_);
+  return r;
+}
+
+void BodyTracker::set_sensor_live(int i, bool live) {
+  if (i < 0 || i >= sensor_count()) return;
+  const int seg = sensors_[static_cast<size_t>(i)].segment;
+  if (seg >= 0) skeleton_.set_sensor_live(seg, live);
+}
+
+}  // namespace mocap::rig
