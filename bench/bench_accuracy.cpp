@@ -4,8 +4,8 @@
 // RMSE, root drift vs ground truth) and, with --markdown, the table for docs/accuracy.md.
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <cstdlib>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
@@ -177,6 +177,7 @@ int run_accuracy(int argc, char** argv) {
       .flag("warmup",
             "the sensors run for 22 s of walking and turning before the calibration stand")
       .option("mag", "with magnetometers (9D): on|off (default on; off: 6D)")
+      .option("frame-rate", "pose frames per second (default: one per sample time)")
       .option("clips", "every .bvh file in this folder as a motion (calibration procedure first)")
       .option("seeds", "comma list of seeds (default: --seed)")
       .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
@@ -218,6 +219,8 @@ int run_accuracy(int argc, char** argv) {
   if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
   base.calibration_moves = args.has("calibration-moves");
   if (!on_off(args, "mag", base.use_mag)) return 2;
+  if (!args.get_double("frame-rate", base.frame_rate_hz)) return 2;
+
   base.warmup = args.has("warmup");
   if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();
   if (args.has("sensor-errors")) {
@@ -235,14 +238,15 @@ int run_accuracy(int argc, char** argv) {
     for (const auto& e : std::filesystem::directory_iterator(args.get_or("clips", ".")))
       if (e.path().extension() == ".bvh") files.push_back(e.path().string());
     std::sort(files.begin(), files.end());
-    for (const auto& f : files) motions.push_back(f);
+    for (const auto& f : files)
+      motions.push_back(f);
     base.calibration_moves = true;
   }
   std::vector<uint64_t> seeds;
   for (const std::string& v : expand(args.get_or("seeds", std::to_string(seed)), {}))
     seeds.push_back(std::strtoull(v.c_str(), nullptr, 10));
-  const auto disturbances =
-      expand(args.get_or("disturbance", "none,both"), {"none", "magnet", "desk", "both", "arm_magnet"});
+  const auto disturbances = expand(args.get_or("disturbance", "none,both"),
+                                   {"none", "magnet", "desk", "both", "arm_magnet"});
 
   nlohmann::json out;
   out["bench"] = "accuracy";
@@ -262,18 +266,18 @@ int run_accuracy(int argc, char** argv) {
   try {
     for (const auto& m : motions) {
       for (const auto& d : disturbances)
-      for (const uint64_t sd : seeds) {
-        sim::AccuracyOptions o = base;
-        o.motion = m;
-        o.disturbance = d;
-        o.seed = sd;
-        const sim::AccuracyResult r = sim::run_accuracy(o);
-        nlohmann::json jr = to_json(r);
-        jr["seed"] = sd;
-        out["results"].push_back(jr);
-        if (args.has("markdown")) print_markdown_row(r);
-        all_ok = all_ok && r.calibrated;
-      }
+        for (const uint64_t sd : seeds) {
+          sim::AccuracyOptions o = base;
+          o.motion = m;
+          o.disturbance = d;
+          o.seed = sd;
+          const sim::AccuracyResult r = sim::run_accuracy(o);
+          nlohmann::json jr = to_json(r);
+          jr["seed"] = sd;
+          out["results"].push_back(jr);
+          if (args.has("markdown")) print_markdown_row(r);
+          all_ok = all_ok && r.calibrated;
+        }
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mocap bench accuracy: %s\n", e.what());

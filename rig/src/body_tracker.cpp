@@ -1,6 +1,8 @@
 // BodyTracker: gyro scale -> filter -> calibration capture -> skeleton, for one rig.
 #include "mocap/rig/body_tracker.hpp"
 
+#include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -48,7 +50,8 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       opt_(std::move(options)),
       filters_(sensors_.size(), AttitudeFilter(opt_.filter)),
       skeleton_(model, limits, rig_mapping(sensors_), opt_.skeleton),
-      calibrator_(rig_mapping(sensors_), calibrator_options(sensors_, opt_)) {}
+      calibrator_(rig_mapping(sensors_), calibrator_options(sensors_, opt_)),
+      heading_(opt_.heading_from_motion) {}
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
   const AttitudeFilter& f = filters_[static_cast<size_t>(i)];
@@ -74,14 +77,64 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
     calibrator_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
     if (calibrator_.done(s.t_host_ns)) {
       result_ = calibrator_.finish();
-      if (result_->ok()) skeleton_.set_calibration(result_->calibration);
+      if (result_->ok()) {
+        skeleton_.set_calibration(result_->calibration);
+        start_heading_from_motion(*result_);
+      }
     }
   }
-  // 4. The segment's input: orientation and the filter's flags.
+  // 4. 6D: the heading of the sensors whose site normal could not give it, from motion.
+  if (heading_.active() && s.has(kFieldGyr)) {
+    const Eigen::Vector3d w_sensor = s.gyr_rad_s - f.gyro_bias_rad_s();
+    heading_.add(seg, skeleton_.calibration().q_correction[seg] * (q * w_sensor), s.t_host_ns);
+    apply_heading_from_motion(s.t_host_ns);
+  }
+  // 5. The segment's input: orientation and the filter's flags.
   const uint32_t flags = (f.at_rest() ? uint32_t{kSegAtRest} : 0u) |
                          (opt_.use_mag && f.mag_disturbed() ? uint32_t{kSegMagDisturbed} : 0u) |
                          (opt_.use_mag && f.mag_no_reference() ? uint32_t{kSegMagNoReference} : 0u);
   skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags);
+}
+
+void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
+  std::array<int, kSegmentCount> reference;
+  reference.fill(-1);
+  const RigMapping& rig = skeleton_.rig();
+  if (!opt_.use_mag && opt_.calibrator.heading == HeadingSource::mount_normals)
+    for (int s = 0; s < kSegmentCount; ++s) {
+      if (!rig.tracked(s) || r.heading_from_own_normal[s]) continue;
+      int p = kSegmentParent[s];
+      while (p >= 0 && !(rig.tracked(p) && r.heading_from_own_normal[p]))
+        p = kSegmentParent[p];
+      reference[s] = p;
+    }
+  heading_.reset(reference);
+}
+
+void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
+  constexpr int64_t kEveryNs = 100'000'000;  // 10 Hz: the alignment is a slow constant
+  constexpr double kMinTurnRad = 0.1 * std::numbers::pi / 180;
+  if (t_ns - heading_applied_t_ns_ < kEveryNs) return;
+  heading_applied_t_ns_ = t_ns;
+  Calibration c = skeleton_.calibration();
+  bool changed = false;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    double yaw = 0;
+    if (!heading_.estimate(s, yaw) || std::abs(yaw) < kMinTurnRad) continue;
+    // The sensor's frame turns by yaw; its mounting keeps the segment's calibration pose:
+    // q_ss' = q_ss T^-1 Y^-1 T with T the segment's orientation at calibration.
+    const Eigen::Quaterniond y(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+    const Eigen::Quaterniond t =
+        Eigen::Quaterniond(
+            Eigen::AngleAxisd(c.heading_deg * std::numbers::pi / 180, Eigen::Vector3d::UnitZ())) *
+        q_body_segment_in_pose(c.pose, s);
+    c.q_correction[s] = (y * c.q_correction[s]).normalized();
+    c.q_sensor_segment[s] =
+        (c.q_sensor_segment[s] * t.conjugate() * y.conjugate() * t).normalized();
+    heading_.applied(s, yaw);
+    changed = true;
+  }
+  if (changed) skeleton_.set_calibration(c);
 }
 
 void BodyTracker::start_calibration(CalibrationPose pose, int64_t t_start_ns) {

@@ -105,7 +105,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   tracker.start_calibration(CalibrationPose::npose, to_ns(capture_start_s));
 
   // Frames fall on the sample times (the performer's sensors sample together).
-  const double frame_s = 1.0 / o.rate_hz;
+  const double frame_s = 1.0 / (o.frame_rate_hz > 0 ? o.frame_rate_hz : o.rate_hz);
   const double end_s = perf.track().period_s();
   std::vector<ImuSample> samples;
   samples.reserve(4 * Performer::kSensorCount);
@@ -157,7 +157,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     const Skeleton& skeleton = tracker.skeleton();
     {
       SegmentMetric::Orientations q_alone, q_true;
-      for (int s = 0; s < kSegmentCount; ++s) q_true[s] = truth.q_earth_segment[s];
+      for (int s = 0; s < kSegmentCount; ++s)
+        q_true[s] = truth.q_earth_segment[s];
       q_alone = q_true;
       for (int id = 0; id < Performer::kSensorCount; ++id)
         q_alone[index(Performer::sensor_segment(id))] = alone_align[id] * alone_q(id);

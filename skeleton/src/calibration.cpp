@@ -229,9 +229,11 @@ CalibrationResult Calibrator::finish() {
         // Each sensor's own heading frame: align each on its own normal (the body faces +x).
         for (int i = 0; i < kSegmentCount; ++i) {
           int from = i;
-          while (from >= 0 && !use[from]) from = kSegmentParent[from];
+          while (from >= 0 && !use[from])
+            from = kSegmentParent[from];
           if (from < 0 || !rig_.tracked(i)) continue;
           r.calibration.q_correction[i] = yaw_rotation(-h_site[from]);
+          r.heading_from_own_normal[i] = from == i;
           if (from == i) ++used;
         }
         heading_rad = 0;
@@ -308,8 +310,9 @@ CalibrationResult Calibrator::finish() {
   ok << "calibrated in " << to_string(pose_) << ", heading " << c.heading_deg
      << " deg, worst motion " << worst_motion << " deg";
   if (worst_dev >= 0)
-    ok << "; furthest from the " << to_string(pose_) << ": " << name(static_cast<Segment>(worst_dev))
-       << " tilted " << dev[worst_dev] << " deg (reported only: the tracked motion is unaffected)";
+    ok << "; furthest from the " << to_string(pose_) << ": "
+       << name(static_cast<Segment>(worst_dev)) << " tilted " << dev[worst_dev]
+       << " deg (reported only: the tracked motion is unaffected)";
   if (independent_unaligned)
     ok << "; no sensor site with a horizontal normal: each 6D sensor keeps its own heading";
   r.message = ok.str();

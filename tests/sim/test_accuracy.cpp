@@ -16,7 +16,7 @@ namespace mocap::sim {
 namespace {
 
 std::string clip(const char* name) {
-  return std::string(MOCAP_CMU_DIR) + "/" + name + ".bvh";
+  return std::string(MOCAP_SHARED_DIR) + "/datasets/cmu/" + name + ".bvh";
 }
 
 /// Asserts that no scored segment is worse than its filter alone by more than 0.1 deg.
@@ -38,8 +38,8 @@ TEST(RealMotion, BodyTrackerIsNeverWorseThanTheFiltersAlone) {
         AccuracyOptions o = after_moves(clip(name), seed);
         o.disturbance = disturbance;
         const AccuracyResult r = run_accuracy(o);
-        const std::string what = std::string(name) + " " + disturbance + " seed " +
-                                 std::to_string(seed);
+        const std::string what =
+            std::string(name) + " " + disturbance + " seed " + std::to_string(seed);
         ASSERT_TRUE(r.calibrated) << what << ": " << r.calibration_message;
         EXPECT_GT(r.frames, 100) << what;
         expect_no_worse_than_filters_alone(r, what);
@@ -59,6 +59,13 @@ TEST(RealMotion, SixDRigCalibratesFromTheSiteNormals) {
   for (Segment s : {Segment::pelvis, Segment::torso, Segment::thigh_l, Segment::thigh_r,
                     Segment::upper_arm_l, Segment::upper_arm_r})
     EXPECT_LE(r.metric_segment_deg[index(s)], r.alone_segment_deg[index(s)] + 6.0) << name(s);
+  // Head and feet (vertical site normals) are aligned from motion during the walk: measured
+  // 5.4 / 10.3 / 11.1 deg (a heading borrowed from the segment above: 30 / 29 / 6). Guards.
+  for (Segment s : {Segment::head, Segment::foot_l, Segment::foot_r})
+    EXPECT_LE(r.metric_segment_deg[index(s)], 15.0) << name(s);
+  // Target (mean <= 1.5 x the ideally aligned filters) missed: measured 3.0 x here, 1.86 x
+  // over the 24 clips (docs/accuracy.md). A regression guard.
+  EXPECT_LE(r.metric_mean_deg, 3.5 * r.alone_mean_deg);
 }
 
 // A sloppy N-pose: the clip's own first frame held (bent elbows, arms off the body) instead of
@@ -73,7 +80,8 @@ TEST(RealMotion, SloppyNPoseStillCalibratesAndSaysHowFarOff) {
     EXPECT_NE(r.calibration_message.find("furthest from the npose"), std::string::npos)
         << r.calibration_message;
     double worst = 0;
-    for (int s = 0; s < kSegmentCount; ++s) worst = std::max(worst, r.pose_deviation_deg[s]);
+    for (int s = 0; s < kSegmentCount; ++s)
+      worst = std::max(worst, r.pose_deviation_deg[s]);
     EXPECT_GT(worst, 5.0) << name;
     expect_no_worse_than_filters_alone(r, name);
   }
@@ -87,7 +95,8 @@ TEST(Accuracy, ProceduralMotionsMatchTheFiltersAlone) {
     ASSERT_TRUE(r.calibrated) << r.calibration_message;
     record(r);
     expect_no_worse_than_filters_alone(r, motion);
-    for (int s = 0; s < kSegmentCount; ++s) EXPECT_TRUE(std::isfinite(r.segment_rmse_deg[s]));
+    for (int s = 0; s < kSegmentCount; ++s)
+      EXPECT_TRUE(std::isfinite(r.segment_rmse_deg[s]));
   }
 }
 

@@ -3,7 +3,9 @@
 //   2. the sensor's AttitudeFilter (9D, or 6D without magnetometers),
 //   3. the calibration capture (N-/T-pose, Calibrator), which turns each sensor's orientation
 //      into its segment's (mounting, and in 6D each sensor's own heading from its site normal),
-//   4. the skeleton's input (orientation, flags, angular rate);
+//   4. in 6D, the heading alignment from motion of the sensors whose site normal is vertical
+//      (head, feet: heading_from_motion.hpp), a constant per sensor once found,
+//   5. the skeleton's input (orientation and flags);
 // and per frame the skeleton solve (each segment holds its sensor's newest orientation).
 //
 // Nothing between the filter and the segment changes a segment's motion: a segment is its own
@@ -20,6 +22,7 @@
 
 #include "mocap/core/imu_sample.hpp"
 #include "mocap/filter/attitude_filter.hpp"
+#include "mocap/rig/heading_from_motion.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
@@ -43,6 +46,7 @@ struct TrackerOptions {
   /// Calibration capture; heading source mount_normals takes the site normals from the sensors.
   CalibratorOptions calibrator;
   SkeletonOptions skeleton;
+  HeadingFromMotionOptions heading_from_motion;  ///< 6D only
 };
 
 class BodyTracker {
@@ -67,6 +71,8 @@ class BodyTracker {
   void reset_heading() { skeleton_.reset_heading(); }
   void set_sensor_live(int i, bool live);
 
+  /// The motion-found heading alignment (6D head and feet).
+  const HeadingFromMotion& heading_from_motion() const { return heading_; }
   /// The posture at t_ns.
   void solve(int64_t t_ns, PoseFrame& out) { skeleton_.solve(t_ns, out); }
 
@@ -89,6 +95,10 @@ class BodyTracker {
   Calibrator calibrator_;
   std::optional<CalibrationResult> result_;
   int64_t newest_t_ns_ = 0;
+  HeadingFromMotion heading_;
+  int64_t heading_applied_t_ns_ = 0;
+  void start_heading_from_motion(const CalibrationResult& r);
+  void apply_heading_from_motion(int64_t t_ns);
 };
 
 /// The rig mapping (segment -> sensor index) of a sensor list.

@@ -49,6 +49,8 @@ struct AccuracyOptions {
   bool gyro_scale_calibration = false;
   /// With magnetometers (9D); false: the samples' magnetometer readings are dropped (6D rigs).
   bool use_mag = true;
+  /// Pose frames per second (0: one per sample time, as the sensors sample together).
+  double frame_rate_hz = 0;
 };
 
 struct AccuracyResult {
@@ -71,9 +73,9 @@ struct AccuracyResult {
   /// aligned once at calibration to its sensor's true heading: the ideal a calibration reaches).
   std::array<double, kSegmentCount> metric_segment_deg{}, alone_segment_deg{};
   double metric_mean_deg = 0, alone_mean_deg = 0;
-  double root_drift_m = 0;            ///< horizontal pelvis error at the end
-  double root_max_error_m = 0;        ///< largest horizontal pelvis error during the motion
-  double distance_walked_m = 0;       ///< true horizontal pelvis path length
+  double root_drift_m = 0;       ///< horizontal pelvis error at the end
+  double root_max_error_m = 0;   ///< largest horizontal pelvis error during the motion
+  double distance_walked_m = 0;  ///< true horizontal pelvis path length
   /// root_drift_m / distance_walked_m (0 when less than 1 m was walked).
   double root_drift_fraction = 0;
   // Diagnostics, per segment with a sensor (degrees):

@@ -103,7 +103,8 @@ struct CalibratorOptions {
   /// 6D rigs: each sensor's filter has a heading frame of its own (no magnetometer). With
   /// mount_normals every sensor's heading is then aligned on its own from its site's normal
   /// (q_correction); a segment whose site normal is near vertical (head, feet) takes the
-  /// alignment of the nearest segment above it that has one.
+  /// alignment of the nearest segment above it that has one (the body tracker then finds its
+  /// own from motion, rig/heading_from_motion.hpp).
   bool independent_headings = false;
 };
 
@@ -123,6 +124,9 @@ struct CalibrationResult {
   /// of the normal against the pose's, degrees (-1: not observable). Reported, not refused: a
   /// constant offset does not change the tracked motion.
   std::array<double, kSegmentCount> pose_deviation_deg{};
+  /// independent_headings: the segment's heading alignment came from its own site normal; false
+  /// where it was borrowed from a segment above (head, feet), to be found from motion.
+  std::array<bool, kSegmentCount> heading_from_own_normal{};
   std::string message;  ///< human-readable verdict naming the offending segments
   bool ok() const { return status == CalibrationStatus::ok; }
 };

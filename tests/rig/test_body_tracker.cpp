@@ -1,0 +1,117 @@
+// BodyTracker: the invariant that no body-level correction changes a segment's motion (each is
+// its own sensor's filter output through the calibration), 6D calibration without refusal.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <optional>
+
+#include "mocap/rig/body_tracker.hpp"
+#include "mocap/skeleton/joint_limits.hpp"
+
+namespace mocap::rig {
+namespace {
+
+// Three sensors flat on their standard sites, each in a frame turned about the vertical by its
+// own angle (as 6D filters start), standing still in the N-pose for 3 s, then turning.
+struct Rig {
+  std::vector<TrackerSensor> sensors;
+  std::vector<Eigen::Quaterniond> q_earth_sensor0;  // in the N-pose
+  Rig() {
+    for (Segment s : {Segment::pelvis, Segment::thigh_l, Segment::foot_l}) {
+      TrackerSensor t;
+      t.segment = index(s);
+      sensors.push_back(t);
+    }
+    // Sensor z along each site's outward normal (pelvis: -x, thigh_l: front-left, foot: up).
+    q_earth_sensor0 = {
+        Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitX()),
+        Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(),
+                                           Eigen::Vector3d(1, 0.4, 0).normalized()),
+        Eigen::Quaterniond::Identity()};
+  }
+};
+
+ImuSample sample(int id, const Eigen::Quaterniond& q_earth_sensor, const Eigen::Vector3d& w,
+                 int64_t t_ns, bool mag) {
+  ImuSample s;
+  s.sensor_id = static_cast<uint16_t>(id);
+  s.t_host_ns = t_ns;
+  s.valid = kFieldGyr | kFieldAcc | (mag ? kFieldMag : 0);
+  s.gyr_rad_s = w;
+  s.acc_m_s2 = q_earth_sensor.conjugate() * Eigen::Vector3d(0, 0, 9.81);
+  s.mag_uT = q_earth_sensor.conjugate() * Eigen::Vector3d(0, 25, -43);
+  return s;
+}
+
+void run(bool use_mag, const std::function<void(BodyTracker&, const PoseFrame&)>& check) {
+  Rig rig;
+  TrackerOptions o;
+  o.use_mag = use_mag;
+  o.calibrator.heading = HeadingSource::mount_normals;
+  o.calibrator.capture_s = 1.0;
+  BodyTracker tracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
+  tracker.start_calibration(CalibrationPose::npose, 1'500'000'000);
+  const Eigen::Vector3d w_earth(0.2, 0.5, 1.0);  // the whole body turning after 3 s
+  PoseFrame frame;
+  for (int k = 0; k < 600; ++k) {
+    const int64_t t = static_cast<int64_t>(k) * 10'000'000;
+    const double turn_s = std::max(0.0, k * 0.01 - 3.0);
+    const Eigen::Quaterniond r(Eigen::AngleAxisd(turn_s * w_earth.norm(), w_earth.normalized()));
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Quaterniond q = r * rig.q_earth_sensor0[i];
+      const Eigen::Vector3d w =
+          k * 0.01 > 3.0 ? Eigen::Vector3d(q.conjugate() * w_earth) : Eigen::Vector3d::Zero();
+      tracker.on_sample(i, sample(i, q, w, t, use_mag));
+    }
+    if (auto res = tracker.take_calibration_result()) {
+      ASSERT_TRUE(res->ok()) << res->message;
+    }
+    tracker.solve(t, frame);
+    check(tracker, frame);
+  }
+  EXPECT_TRUE(tracker.skeleton().calibration().valid);
+}
+
+TEST(BodyTracker, EachSegmentIsItsSensorsFilterThroughTheCalibration) {
+  for (bool use_mag : {true, false}) {
+    int checked = 0;
+    run(use_mag, [&](BodyTracker& t, const PoseFrame&) {
+      const Calibration& c = t.skeleton().calibration();
+      if (!c.valid) return;
+      for (int i = 0; i < t.sensor_count(); ++i) {
+        const int seg = t.sensor(i).segment;
+        const Eigen::Quaterniond want = c.segment_from_sensor(seg, t.q_earth_sensor(i));
+        EXPECT_LT(t.skeleton().q_earth_segment()[seg].angularDistance(want), 1e-12) << seg;
+      }
+      ++checked;
+    });
+    EXPECT_GT(checked, 300) << use_mag;
+  }
+}
+
+TEST(BodyTracker, SixDCalibratesWithoutAMagnetometerAndMarksTheBorrowedHeadings) {
+  Rig rig;
+  TrackerOptions o;
+  o.use_mag = false;
+  o.calibrator.heading = HeadingSource::mount_normals;
+  o.calibrator.capture_s = 1.0;
+  BodyTracker tracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
+  tracker.start_calibration(CalibrationPose::npose, 500'000'000);
+  std::optional<CalibrationResult> res;
+  for (int k = 0; k < 200 && !res; ++k)
+    for (int i = 0; i < 3; ++i) {
+      tracker.on_sample(i, sample(i, rig.q_earth_sensor0[i], Eigen::Vector3d::Zero(),
+                                  static_cast<int64_t>(k) * 10'000'000, false));
+      if (!res) res = tracker.take_calibration_result();
+    }
+  ASSERT_TRUE(res && res->ok()) << (res ? res->message : "no result");
+  EXPECT_TRUE(res->heading_from_own_normal[index(Segment::pelvis)]);
+  EXPECT_TRUE(res->heading_from_own_normal[index(Segment::thigh_l)]);
+  EXPECT_FALSE(res->heading_from_own_normal[index(Segment::foot_l)]);  // vertical normal
+  EXPECT_TRUE(tracker.heading_from_motion().active());
+}
+
+}  // namespace
+}  // namespace mocap::rig
