@@ -107,6 +107,16 @@ void PipelineCore::set_connected(int sensor, bool connected) {
 void PipelineCore::publish_frame(int64_t t_now_ns) {
   maybe_finish_calibration(t_now_ns);
   const int64_t stale_ns = static_cast<int64_t>(cfg_.stale_after_ms * 1e6);
+  // Every frame has a time of its own: the newest sample's (a frame carries the pose of that
+  // time; docs/accuracy.md shows holding it beats predicting). No sample since the last frame:
+  // no new pose, no frame, unless the sensors fell silent for stale_after_ms, when a frame at
+  // the clock's time reports them stale.
+  int64_t t_frame_ns = newest_t_ns_;
+  if (published_t_ns_ != INT64_MIN && t_frame_ns <= published_t_ns_) {
+    if (t_now_ns - published_t_ns_ < stale_ns) return;
+    t_frame_ns = t_now_ns;
+  }
+  published_t_ns_ = t_frame_ns;
   // Sensors that went silent degrade their segment (the engine infers it from the parent).
   for (size_t i = 0; i < sensors_.size(); ++i) {
     Health& h = health_[i];
@@ -116,9 +126,9 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
       engine_.set_sensor_live(static_cast<int>(i), false);
     }
   }
-  engine_.build_frame(newest_t_ns_, frame_);
+  engine_.build_frame(t_frame_ns, frame_);
   frame_.frame = ++frame_no_;
-  frame_.t_ns = newest_t_ns_;
+  frame_.t_ns = t_frame_ns;
   frame_.flags = (frame_.flags & kFrameCalibrated) | extra_flags_;
   if (calibrating_) {
     frame_.flags |= kFrameCalibrating;

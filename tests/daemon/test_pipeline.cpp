@@ -80,6 +80,38 @@ TEST(PipelineCore, SampleClockPublishesAtRateWithHealth) {
   EXPECT_NEAR(Eigen::AngleAxisd(q).angle(), 1.99, 0.02);
 }
 
+// Frames faster than the sensors (120 Hz over 100 Hz): every frame has a time of its own, the
+// newest sample's, so exports have one frame per time; silent sensors still get frames (at the
+// clock's time) that report them stale.
+TEST(PipelineCore, EveryFrameHasItsOwnTime) {
+  test::GyroEngine eng;
+  eng.segment[0] = 0;
+  eng.segment[1] = 3;
+  PipelineConfig pc;
+  pc.rate_hz = 120;
+  pc.stale_after_ms = 100;
+  PipelineCore core(pc, CalibrationConfig{}, two_sensors(), eng);
+  CollectSink sink;
+  core.add_sink(&sink);
+  for (int k = 0; k <= 100; ++k) {  // 1 s of both sensors at 100 Hz
+    const int64_t t = k * 10'000'000LL;
+    core.advance_clock_to(t);
+    core.process(sample(0, t));
+    core.process(sample(1, t));
+  }
+  const size_t while_streaming = sink.frames.size();
+  EXPECT_GE(while_streaming, 95u);
+  EXPECT_LE(while_streaming, 101u);
+  for (int64_t t = 1'000'000'000; t <= 2'000'000'000; t += 1'000'000)  // then silence, 1 s
+    core.advance_clock_to(t);
+  ASSERT_GT(sink.frames.size(), while_streaming);
+  for (size_t i = 1; i < sink.frames.size(); ++i)
+    EXPECT_GT(sink.frames[i].t_ns, sink.frames[i - 1].t_ns) << i;
+  for (size_t i = 0; i < while_streaming; ++i)
+    EXPECT_EQ(sink.frames[i].t_ns % 10'000'000, 0) << i;  // sample times
+  EXPECT_EQ(sink.frames.back().sensors[0].state, kStale);
+}
+
 TEST(PipelineCore, RejectsNanAndUnknownSensors) {
   test::GyroEngine eng;
   PipelineCore core(PipelineConfig{}, CalibrationConfig{}, two_sensors(), eng);

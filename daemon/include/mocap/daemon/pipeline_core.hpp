@@ -98,6 +98,7 @@ class PipelineCore {
   PoseFrame frame_;
   uint64_t frame_no_ = 0, samples_ = 0, rejected_ = 0;
   int64_t newest_t_ns_ = 0;
+  int64_t published_t_ns_ = INT64_MIN;  ///< time of the last frame published
   int64_t period_ns_;
   int64_t next_frame_ns_ = INT64_MIN;
   uint32_t extra_flags_ = 0;
