@@ -101,9 +101,6 @@ int run_replay(int argc, char** argv) {
       std::fprintf(stderr, "%s", errs.to_string().c_str());
       return 1;
     }
-  } else if (!sets.empty()) {
-    std::fprintf(stderr, "mocap replay: --set needs --rig\n");
-    return 2;
   }
   ReplayOptions opt;
   if (auto c = args.get("calibrate")) {
@@ -136,6 +133,18 @@ int run_replay(int argc, char** argv) {
     // Read and decode the file on the other core while this one filters and solves.
     src = std::make_unique<PrefetchSource>(std::move(src));
     Config cfg = src->config();
+    if (!rig && !sets.empty()) {
+      // --set without --rig: applied to the input's own configuration (recorded, or the
+      // segment-named sensors of a CSV).
+      ConfigErrors errs;
+      std::optional<Config> with_sets =
+          parse_config(config_to_toml(cfg), input + " (configuration)", sets, errs);
+      if (!with_sets) {
+        std::fprintf(stderr, "%s", errs.to_string().c_str());
+        return 1;
+      }
+      cfg = *with_sets;
+    }
     // Calibrate immediately at the chosen moment (the file is the countdown).
     cfg.calibration.countdown_s = 0;
     // A replay uses the session's own calibration and never writes the live calibration file.

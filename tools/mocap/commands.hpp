@@ -13,5 +13,6 @@ int run_devices(int argc, char** argv);
 int run_bench(int argc, char** argv);
 int run_evaluate(int argc, char** argv);
 int run_gyro_scale(int argc, char** argv);
+int run_score(int argc, char** argv);
 
 }  // namespace mocap::cmd

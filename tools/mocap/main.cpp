@@ -24,6 +24,8 @@ constexpr Command kCommands[] = {
     {"evaluate", mocap::cmd::run_evaluate, "score attitude filters on the BROAD trials"},
     {"gyro-scale", mocap::cmd::run_gyro_scale,
      "each sensor's gyro scale from table spins (a one-time calibration)"},
+    {"score", mocap::cmd::run_score,
+     "full-body metric of a pose CSV against a truth CSV (datasets/cmu/README.md)"},
 };
 
 void usage(FILE* out) {
