@@ -19,6 +19,7 @@
 #include "mocap/skeleton/quat_math.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 #if __has_include("mocap/sim/performer.hpp")
+#include "mocap/rig/body_tracker.hpp"
 #include "mocap/sim/performer.hpp"
 #define MOCAP_BENCH_HAVE_SIM 1
 #endif
@@ -54,6 +55,61 @@ double median_ns(int reps, F&& fn) {
   std::sort(t.begin(), t.end());
   return t[t.size() / 2];
 }
+
+#ifdef MOCAP_BENCH_HAVE_SIM
+/// The body tracker's cost for 15 sensors at 200 Hz (10 s of the performer's walk, frames at
+/// 120 Hz) as a fraction of one core, and the same samples through the 15 filters alone (the
+/// baseline in the same run).
+struct TrackerCost {
+  double tracker_core_fraction = 0, filters_core_fraction = 0;
+};
+
+TrackerCost tracker_cost(double& sink) {
+  sim::PerformerParams pp;
+  pp.motion = "walk";
+  pp.rate_hz = 200;
+  pp.loop = false;
+  sim::Performer perf(pp);
+  std::vector<ImuSample> samples;
+  constexpr int kSteps = 2000;  // 10 s at 200 Hz
+  for (int k = 1; k <= kSteps; ++k)
+    perf.step_to(static_cast<int64_t>(k) * 5'000'000, samples);
+  std::vector<rig::TrackerSensor> sensors(sim::Performer::kSensorCount);
+  for (int i = 0; i < sim::Performer::kSensorCount; ++i)
+    sensors[i].segment = index(sim::Performer::sensor_segment(i));
+  const double span_ns = kSteps * 5e6;
+  TrackerCost c;
+  c.tracker_core_fraction =
+      median_ns(5,
+                [&] {
+                  rig::BodyTracker t(BodyModel(perf.dims()), default_joint_limits(), sensors,
+                                     rig::TrackerOptions{});
+                  t.start_calibration(CalibrationPose::npose, 1'000'000'000);
+                  PoseFrame f;
+                  int64_t next_frame_ns = 0;
+                  for (const ImuSample& s : samples) {
+                    t.on_sample(s.sensor_id, s);
+                    if (s.t_host_ns >= next_frame_ns) {
+                      t.solve(s.t_host_ns, f);
+                      next_frame_ns += 8'333'333;
+                    }
+                  }
+                  sink = sink + f.q_earth_segment[3][0];
+                }) /
+      span_ns;
+  c.filters_core_fraction =
+      median_ns(5,
+                [&] {
+                  std::vector<AttitudeFilter> filters(sim::Performer::kSensorCount,
+                                                      AttitudeFilter(FilterParams{}));
+                  for (const ImuSample& s : samples)
+                    filters[s.sensor_id].update(s);
+                  sink = sink + filters[3].q_earth_sensor().w();
+                }) /
+      span_ns;
+  return c;
+}
+#endif
 
 struct Accuracy {
   bool ran = false;
@@ -260,6 +316,17 @@ int run_skeleton(int argc, char** argv) {
       "\"violating_fraction\": %.2f",
       mul_ns, check_ns / mul_ns, static_cast<double>(violated) / static_cast<double>(jq.size()));
 #ifdef MOCAP_BENCH_HAVE_SIM
+  {
+    double s = 0;
+    const TrackerCost c = tracker_cost(s);
+    sink = sink + s;
+    std::printf(
+        ",\n  \"body_tracker_15_sensors_200hz\": {\"core_fraction\": %.4f, "
+        "\"filters_alone_core_fraction\": %.4f, \"ratio_to_filters_alone\": %.3f, "
+        "\"goal_core_fraction\": 0.05}",
+        c.tracker_core_fraction, c.filters_core_fraction,
+        c.tracker_core_fraction / c.filters_core_fraction);
+  }
   for (int variant = 0; variant < 2; ++variant) {
     const char* m = variant % 2 == 0 ? "walk" : "sequence";
     const bool ankle = false;
