@@ -141,7 +141,19 @@ CalibrationResult Calibrator::finish() {
     }
   }
   if (refused) {
-    r.message = "calibration refused: " + msg.str();
+    // Say what to do differently, once per kind of problem.
+    const std::string found = msg.str();
+    std::string todo;
+    if (found.find("samples (need") != std::string::npos)
+      todo += " Check that every sensor streams (mocapctl status) before calibrating.";
+    if (found.find("moved") != std::string::npos || found.find("accelerating") != std::string::npos)
+      todo += " Stand still for the whole capture (" + std::to_string(opt_.capture_s).substr(0, 4) +
+              " s after the countdown); the pose need not be exact.";
+    if (found.find("gravity") != std::string::npos)
+      todo +=
+          " Let the sensors lie still for a few seconds after switching them on, then try "
+          "again.";
+    r.message = "calibration refused: " + found + "-" + todo;
     return r;
   }
 

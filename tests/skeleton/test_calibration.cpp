@@ -166,6 +166,8 @@ TEST(Calibration, RefusesMotionAndInconsistentGravity) {
     const auto r = cal.finish();
     EXPECT_EQ(r.status, CalibrationStatus::refused);
     EXPECT_NE(r.message.find("moved"), std::string::npos) << r.message;
+    // ... and says what to do differently.
+    EXPECT_NE(r.message.find("Stand still for the whole capture"), std::string::npos) << r.message;
   }
   {
     Calibrator cal(RigMapping::full());
@@ -174,6 +176,7 @@ TEST(Calibration, RefusesMotionAndInconsistentGravity) {
     EXPECT_EQ(r.status, CalibrationStatus::refused);
     EXPECT_NE(r.message.find("gravity"), std::string::npos) << r.message;
     EXPECT_NEAR(r.gravity_error_deg[5], 12.0, 0.01);
+    EXPECT_NE(r.message.find("lie still for a few seconds"), std::string::npos) << r.message;
   }
   {
     rig.q_sensor_segment[0] = Eigen::Quaterniond::Identity();
@@ -192,6 +195,7 @@ TEST(Calibration, RefusesMotionAndInconsistentGravity) {
     const auto r = cal.finish();
     EXPECT_EQ(r.status, CalibrationStatus::refused);
     EXPECT_NE(r.message.find("torso: only 0 samples"), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find("every sensor streams"), std::string::npos) << r.message;
   }
 }
 
