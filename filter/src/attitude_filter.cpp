@@ -59,8 +59,6 @@ void AttitudeFilter::refresh_coeffs() {
   c_.mag_ts_s = st_.mag_ts_nom_s > 0 ? st_.mag_ts_nom_s : c_.acc_ts_s;
 
   c_.acc_lp = filt::butterworth(p_.tau_acc_s, c_.acc_ts_s);
-  c_.acc_fast_lp = filt::butterworth(p_.tau_acc_fast_s, c_.acc_ts_s);
-  c_.k_acc_dyn = filt::gain_from_tau(p_.acc_dyn_tau_s, c_.acc_ts_s);
   c_.rest_gyr_lp = filt::butterworth(p_.rest_filter_tau_s, c_.gyr_ts_s);
   c_.rest_acc_lp = filt::butterworth(p_.rest_filter_tau_s, c_.acc_ts_s);
   c_.mag_norm_dip_lp = filt::butterworth(p_.mag_current_tau_s, c_.mag_ts_s);
@@ -87,7 +85,6 @@ void AttitudeFilter::refresh_coeffs() {
   c_.hard_iron.nis_max = p_.hard_iron_nis_max;
   c_.k_hard_iron_select =
       filt::gain_from_tau(p_.hard_iron_select_tau_s, c_.hard_iron_decim * c_.mag_ts_s);
-  c_.k_mag_consistency = filt::gain_from_tau(p_.mag_consistency_tau_s, c_.mag_ts_s);
   c_.k_latency = filt::gain_from_tau(p_.mag_latency_tau_s, c_.mag_ts_s);
   c_.k_latency_hp = filt::gain_from_tau(p_.mag_latency_hp_tau_s, c_.mag_ts_s);
 
@@ -245,17 +242,7 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   // Acc into the almost-inertial frame.
   const Eigen::Vector3d acc_i = st_.q_gyr * acc;
   const auto& f = st_.acc_lp.step(acc_i.data(), c_.acc_lp, p_.tau_acc_s, ts);
-  Eigen::Vector3d acc_f(f[0], f[1], f[2]);
-  if (p_.tau_acc_fast_s > 0) {
-    // Linear-acceleration intensity: deviation of the specific force from the gravity estimate.
-    st_.acc_dyn_m2_s4 += c_.k_acc_dyn * ((acc_i - acc_f).squaredNorm() - st_.acc_dyn_m2_s4);
-    const auto& ff = st_.acc_fast_lp.step(acc_i.data(), c_.acc_fast_lp, p_.tau_acc_fast_s, ts);
-    st_.gyr_dyn_rad2_s2 += c_.k_acc_dyn * (st_.last_gyr_rad_s.squaredNorm() - st_.gyr_dyn_rad2_s2);
-    const double rho2 = (st_.gyr_dyn_rad2_s2 + 1e-4) / (st_.acc_dyn_m2_s4 + 1e-2);
-    const double ref2 = p_.acc_dyn_ref_rad_s_per_m_s2 * p_.acc_dyn_ref_rad_s_per_m_s2;
-    const double alpha = rho2 / (rho2 + ref2);
-    acc_f = (1.0 - alpha) * acc_f + alpha * Eigen::Vector3d(ff[0], ff[1], ff[2]);
-  }
+  const Eigen::Vector3d acc_f(f[0], f[1], f[2]);
   Eigen::Vector3d acc_e = st_.q_acc * acc_f;
   const double an = acc_e.norm();
   if (!(an > 1e-9)) return;
@@ -498,7 +485,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
         std::abs(dip - st_.mag_cand_dip) < dip_th) {
       // A new field replacing a known one must be seen while rotating (a static local
       // disturbance stays self-consistent at rest); the very first field needs no rotation.
-      if ((st_.mag_ref_norm == 0 && !p_.mag_first_needs_rotation) ||
+      if (st_.mag_ref_norm == 0 ||
           st_.rest_last_gyr_lp.norm() >= p_.mag_new_min_gyr_deg_s * kRadPerDeg)
         st_.mag_cand_t_s += ts;
       st_.mag_cand_age_s += ts;
@@ -523,18 +510,6 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
 
   // Heading measurement.
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.delta_rad);
-  if (p_.mag_dist_rejection && p_.mag_consistency_th > 0) {
-    // Gyro-consistency: the field in the almost-inertial frame must stay put.
-    const Eigen::Vector3d m_i = st_.q_gyr * mag;
-    if (!st_.mag_i_init) {
-      st_.mag_i_mean = m_i;
-      st_.mag_i_init = true;
-    }
-    const Eigen::Vector3d dev = m_i - st_.mag_i_mean;
-    st_.mag_i_mean += c_.k_mag_consistency * dev;
-    st_.mag_i_var_rel +=
-        c_.k_mag_consistency * (dev.squaredNorm() / m_i.squaredNorm() - st_.mag_i_var_rel);
-  }
   // Kalman heading. Predict: the heading drifts by the nominal process noise plus what the
   // gyro-bias uncertainty allows. Measurement variance: nominal (steady state = tau_mag),
   // inflated by the squared disturbance indicators, each relative to its threshold.
@@ -548,17 +523,8 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
     const double rd = ref ? st_.mag_ref_dip : st_.mag_cand_dip;
     double score =
         p_.mag_trust_weight * field_deviation2(st_.mag_norm_dip[0], st_.mag_norm_dip[1], rn, rd);
-    if (p_.mag_consistency_th > 0)
-      score += st_.mag_i_var_rel / (p_.mag_consistency_th * p_.mag_consistency_th);
     // A field that was rejected recently is trusted less until the rejection budget is repaid.
     score += st_.mag_reject_t_s / p_.tau_mag_s;
-    if (st_.hi_weight > 0 && st_.hard_iron.used_sigma_uT > 0) {
-      // A corrected field is only as good as the offset: its sigma as a heading angle.
-      const double sh = st_.hi_weight * st_.hard_iron.used_sigma_uT /
-                        std::max(m_e.head<2>().norm(), 1e-3 * st_.mag_ref_norm + 1e-9);
-      const double rel = sh / (p_.heading_sigma_deg * kRadPerDeg);
-      score += p_.hard_iron_trust_weight * rel * rel;
-    }
     r *= 1.0 + score;
   }
   double k = st_.delta_var_rad2 / (st_.delta_var_rad2 + r);
@@ -625,8 +591,6 @@ Eigen::Quaterniond AttitudeFilter::q_earth_sensor() const {
 // implies (1 after a full reset, about the Kalman gain when the provisional heading is kept).
 void AttitudeFilter::end_mag_startup() {
   st_.mag_have_ref = true;
-  const double s0 = p_.mag_first_ref_sigma_deg * kRadPerDeg;
-  st_.delta_var_rad2 = std::max(st_.delta_var_rad2, s0 * s0);
   st_.k_mag_init = st_.delta_var_rad2 / (st_.delta_var_rad2 + c_.heading_r0_rad2);
 }
 

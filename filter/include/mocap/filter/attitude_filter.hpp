@@ -24,13 +24,6 @@ struct FilterParams {
   /// Kalman heading: steady-state one-sigma heading uncertainty in an undisturbed field (sets
   /// the process and measurement noise together with tau_mag_s).
   double heading_sigma_deg = 1.0;
-  /// Adaptive inclination: a second, faster low-pass (tau_acc_fast_s) is blended in when
-  /// gyro errors (which grow with the rotation rate w) outweigh linear-acceleration errors
-  /// (which grow with the linear acceleration a). Fast weight: rho^2 / (rho^2 + rho_ref^2),
-  /// rho = RMS(w) / RMS(a) over acc_dyn_tau_s (a = |acc_I - LP(acc_I)|). 0 disables.
-  double tau_acc_fast_s = 0.0;              // off: made redundant by the gyro-gain estimate
-  double acc_dyn_ref_rad_s_per_m_s2 = 1.0;  ///< rho_ref, (rad/s) per (m/s^2)
-  double acc_dyn_tau_s = 1.0;
   // --- gyro bias (Kalman filter, sigma values in deg/s) ---
   bool rest_bias_est = true;             ///< estimate bias while at rest
   bool motion_bias_est = true;           ///< estimate horizontal bias from inclination corrections
@@ -62,32 +55,19 @@ struct FilterParams {
   double mag_new_time_s = 20.0;         ///< a new consistent field is accepted after this
   double mag_new_first_time_s = 5.0;    ///< ... or this for the first field
   double mag_new_min_gyr_deg_s = 20.0;  ///< only while rotating at least this fast
-  /// VQF accepts even the first field only while rotating; ours accepts the first field at
-  /// rest too (start-up stand-still = clean reference, full rejection budget for the session).
-  bool mag_first_needs_rotation = false;
-  /// Start-up (no reference field accepted yet): the heading follows the field
-  /// provisionally (flag mag_no_reference). When the first reference is accepted the heading
-  /// variance is raised to at least (mag_first_ref_sigma_deg)^2 and the start-up gain
-  /// schedule (K >= 1/N for tau_mag_s) restarts, so the heading converges on accepted samples
-  /// only; the schedule counts only samples that pass the disturbance tests. 0 keeps the
-  /// provisional heading's variance.
-  double mag_first_ref_sigma_deg = 0.0;
+  // Unlike VQF, the first field is accepted at rest too (start-up stand-still = clean
+  // reference, full rejection budget for the session). Before it the heading follows the field
+  // provisionally (flag mag_no_reference); when it is accepted the start-up gain schedule
+  // (K >= 1/N for tau_mag_s) restarts from the provisional heading's variance, counting only
+  // samples that pass the disturbance tests.
   double mag_min_undisturbed_time_s = 0.5;
   double mag_max_rejection_time_s = 60.0;  ///< longest full rejection
   double mag_rejection_factor = 2.0;       ///< gain divisor after that
   /// Soft trust: the heading measurement variance is multiplied by 1 + score, score =
   /// mag_trust_weight * ((norm dev / mag_norm_th)^2 + (dip dev / mag_dip_th_deg)^2)
-  /// + (rejection time not yet repaid) / tau_mag_s (+ the consistency term below).
+  /// + (rejection time not yet repaid) / tau_mag_s.
   double mag_trust_weight = 3.0;
   // --- extensions beyond VQF (false/0 = plain VQF behaviour) ---
-  /// Gyro-consistency test: in a homogeneous field the magnetometer vector seen in the
-  /// almost-inertial frame (gyro only, no inclination involved) stays constant. Its RMS
-  /// deviation from its own mean over mag_consistency_tau_s, relative to the field norm and
-  /// to this threshold, squared, adds to the soft-trust score (gradients, magnets moving with
-  /// the sensor). 0 disables: the default, because on BROAD distrusting the field more often
-  /// cost more accuracy (fast rotation needs magnetometer updates) than it saved.
-  double mag_consistency_th = 0.0;
-  double mag_consistency_tau_s = 1.0;  ///< averaging window of that test
   /// Online hard-iron offset b (a magnet or magnetised part fixed to the sensor), from the
   /// gyro-predicted rotation of the field (filt::HardIronEstimator, Kalman filter of the
   /// field in the 6D frame and b). hard_iron_tau_s: without rotation b's uncertainty grows
@@ -118,10 +98,6 @@ struct FilterParams {
   double hard_iron_consistent_nis = 0.2;
   double hard_iron_consistent_s = 10.0;
   double hard_iron_consistent_min_sigmas = 0.5;  ///< significance required on that path
-  /// While an offset is applied its remaining uncertainty (one-sigma over the horizontal
-  /// field, as a heading angle) relative to heading_sigma_deg, squared and times this weight,
-  /// adds to the heading's soft-trust score: the heading follows a corrected field more slowly.
-  double hard_iron_trust_weight = 0.0;  // off: slower heading costs more (gyro drift) on BROAD
   // --- magnetometer latency (ours) ---
   /// A magnetometer often samples the motion later than the gyro (longer integration,
   /// internal filters): during fast rotation its heading then lags. The latency is
@@ -153,12 +129,11 @@ struct FilterCounters {
 /// Coefficients derived from params and the sampling periods (not saved; recomputed).
 struct FilterCoeffs {
   double gyr_ts_s = 0, acc_ts_s = 0, mag_ts_s = 0;
-  filt::LowpassCoeffs acc_lp, acc_fast_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
-  double k_acc_dyn = 0;
+  filt::LowpassCoeffs acc_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
   filt::HardIronCoeffs hard_iron;
   double k_hard_iron_select = 0;
   int hard_iron_decim = 1;  ///< estimator runs every hard_iron_decim magnetometer samples
-  double k_mag = 0, k_mag_ref = 0, k_mag_consistency = 0;
+  double k_mag = 0, k_mag_ref = 0;
   double k_latency = 0, k_latency_hp = 0;
   int bias_decim = 1;           ///< bias KF runs every bias_decim acc samples (about 100 Hz)
   double bias_ts_s = 0;         ///< its period
@@ -185,9 +160,7 @@ struct FilterState {
   Eigen::Vector3d last_gyr_rad_s = Eigen::Vector3d::Zero();
   filt::LatencyEstimator mag_latency;
   // inclination
-  filt::Lowpass<3> acc_lp, acc_fast_lp;
-  double acc_dyn_m2_s4 = 0;    ///< smoothed squared linear-acceleration estimate
-  double gyr_dyn_rad2_s2 = 0;  ///< smoothed squared rotation rate
+  filt::Lowpass<3> acc_lp;
   Eigen::Vector3d last_acc_earth = Eigen::Vector3d::UnitZ();
   // bias
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();
@@ -224,9 +197,6 @@ struct FilterState {
   double mag_cand_age_s = 0;  ///< time the field has stayed consistent with the candidate
   filt::Lowpass<2> mag_norm_dip_lp;
   double mag_norm_dip[2] = {0, 0};
-  Eigen::Vector3d mag_i_mean = Eigen::Vector3d::Zero();  ///< consistency test: mean of q_gyr m
-  double mag_i_var_rel = 0;                              ///< and relative deviation power
-  bool mag_i_init = false;
   // hard-iron offset
   filt::HardIronEstimator hard_iron;
   int hi_n = 0;                ///< magnetometer samples since the last estimator step
@@ -305,7 +275,6 @@ class AttitudeFilter {
   Eigen::Matrix3d gyro_gain() const;
   /// One-sigma heading uncertainty of the 9D output, rad (large before any magnetometer).
   double heading_sigma_rad() const;
-
 
   FilterState state() const { return st_; }
   void set_state(const FilterState& s);
