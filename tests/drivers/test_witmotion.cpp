@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "collect_sink.hpp"
-#include "mocap/drivers/sim_device.hpp"
+#include "mocap/devsim/sim_device.hpp"
 #include "mocap/drivers/witmotion.hpp"
 
 using namespace mocap;

@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "mocap/filter/broad_csv.hpp"
-#include "mocap/filter/broad_metric.hpp"
+#include "mocap/eval/broad_csv.hpp"
+#include "mocap/eval/broad_metric.hpp"
 
 namespace mocap {
 namespace {
