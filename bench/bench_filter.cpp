@@ -7,11 +7,11 @@
 #include <vector>
 
 #include "bench.hpp"
+#include "mocap/eval/madgwick.hpp"
+#include "mocap/eval/mahony.hpp"
+#include "mocap/eval/run_trial.hpp"
 #include "mocap/filter/attitude_filter.hpp"
 #include "mocap/filter/filter_param_names.hpp"
-#include "mocap/filter/madgwick.hpp"
-#include "mocap/filter/mahony.hpp"
-#include "mocap/filter/run_trial.hpp"
 
 namespace mocap::bench {
 namespace {

@@ -39,7 +39,7 @@ double now_ns() {
 Eigen::Quaterniond random_q(std::mt19937& rng, double max_deg) {
   std::normal_distribution<double> n(0, 1);
   Eigen::Vector3d axis(n(rng), n(rng), n(rng));
-  std::uniform_real_distribution<double> u(0, max_deg * kDegToRad);
+  std::uniform_real_distribution<double> u(0, max_deg * kRadPerDeg);
   return Eigen::Quaterniond(Eigen::AngleAxisd(u(rng), axis.normalized()));
 }
 

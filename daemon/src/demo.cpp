@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "mocap/core/time.hpp"
-#include "mocap/drivers/sim_encoder.hpp"
+#include "mocap/devsim/sim_encoder.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/sim/sensor_model.hpp"
 #include "mocap/sim/table_spin.hpp"

@@ -69,9 +69,7 @@ void Pipeline::on_sample(const ImuSample& sample) {
 }
 
 void Pipeline::on_raw(uint16_t device_index, int64_t t_host_ns, std::span<const uint8_t> bytes) {
-  tap_users_.fetch_add(1);
-  if (RecordTap* t = tap_.load()) t->on_raw(device_index, t_host_ns, bytes);
-  tap_users_.fetch_sub(1);
+  with_tap([&](RecordTap& t) { t.on_raw(device_index, t_host_ns, bytes); });
 }
 
 void Pipeline::on_connection(uint16_t device_index, bool connected, std::string_view reason) {
@@ -134,9 +132,7 @@ uint64_t Pipeline::ring_drops() const {
 }
 
 void Pipeline::TapSink::publish(const PoseFrame& f) {
-  p_.tap_users_.fetch_add(1);
-  if (RecordTap* t = p_.tap_.load()) t->on_frame(f);
-  p_.tap_users_.fetch_sub(1);
+  p_.with_tap([&](RecordTap& t) { t.on_frame(f); });
 }
 
 void Pipeline::apply_commands(int64_t now_ns) {
@@ -182,9 +178,7 @@ void Pipeline::drain() {
     }
     if (best < 0) break;
     const ImuSample& s = scratch_[best][scratch_pos_[best]++];
-    tap_users_.fetch_add(1);
-    if (RecordTap* t = tap_.load()) t->on_sample(s);
-    tap_users_.fetch_sub(1);
+    with_tap([&](RecordTap& t) { t.on_sample(s); });
     core_.process(s);
   }
 }

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "mocap/core/units.hpp"
+
 namespace mocap::daemon {
 
 namespace {
@@ -159,8 +161,8 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
                                      (fs.mag_disturbed ? uint32_t{kSegMagDisturbed} : 0u) |
                                      (fs.mag_no_reference ? uint32_t{kSegMagNoReference} : 0u) |
                                      (h.live ? 0u : uint32_t{kSegStale}));
-    st.gyro_bias_dps = static_cast<float>(fs.gyro_bias_rad_s * 180.0 / M_PI);
-    st.heading_sigma_deg = static_cast<float>(fs.heading_sigma_rad * 180.0 / M_PI);
+    st.gyro_bias_dps = static_cast<float>(fs.gyro_bias_rad_s * kDegPerRad);
+    st.heading_sigma_deg = static_cast<float>(fs.heading_sigma_rad * kDegPerRad);
     if (sensors_[i].segment >= 0 && !h.live) frame_.segment_flags[sensors_[i].segment] |= kSegStale;
   }
   for (FrameSink* s : sinks_)

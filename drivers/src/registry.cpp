@@ -2,7 +2,7 @@
 #include <stdexcept>
 
 #include "mocap/drivers/device.hpp"
-#include "mocap/drivers/sim_transport.hpp"
+#include "mocap/drivers/transport.hpp"
 #include "protocols.hpp"
 #include "stream_device.hpp"
 

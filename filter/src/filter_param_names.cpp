@@ -5,10 +5,6 @@
 #include <cstdio>
 #include <variant>
 
-#ifndef MOCAP_BROAD_DIR
-#define MOCAP_BROAD_DIR "../shared/datasets/broad"
-#endif
-
 namespace mocap {
 namespace {
 
@@ -123,10 +119,6 @@ std::string describe_filter_params(const FilterParams& p) {
     out += buf;
   }
   return out;
-}
-
-std::string default_broad_dir() {
-  return MOCAP_BROAD_DIR;
 }
 
 }  // namespace mocap

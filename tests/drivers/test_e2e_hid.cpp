@@ -9,9 +9,9 @@
 #include <unistd.h>
 
 #include "collect_sink.hpp"
+#include "mocap/devsim/sim_transport.hpp"
 #include "mocap/drivers/joycon.hpp"
 #include "mocap/drivers/playstation.hpp"
-#include "mocap/drivers/sim_transport.hpp"
 
 using namespace mocap;
 

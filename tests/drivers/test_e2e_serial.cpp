@@ -10,7 +10,7 @@
 #include <filesystem>
 
 #include "collect_sink.hpp"
-#include "mocap/drivers/sim_device.hpp"
+#include "mocap/devsim/sim_device.hpp"
 
 using namespace mocap;
 

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "collect_sink.hpp"
-#include "mocap/drivers/sim_device.hpp"
+#include "mocap/devsim/sim_device.hpp"
 
 using namespace mocap;
 

@@ -2,7 +2,8 @@
 #include <gtest/gtest.h>
 
 #include "collect_sink.hpp"
-#include "mocap/drivers/sim_device.hpp"
+#include "mocap/core/units.hpp"
+#include "mocap/devsim/sim_device.hpp"
 #include "mocap/drivers/witmotion.hpp"
 
 using namespace mocap;
@@ -62,7 +63,7 @@ TEST(Witmotion, ConfiguredStreamDecodesTruth) {
     max_q = std::max(max_q, s.q_device_sensor.angularDistance(truth.q_device_sensor));
   }
   EXPECT_GE(complete, 298);
-  EXPECT_LT(max_gyr, 2000.0 / 32768 * M_PI / 180);  // one LSB
+  EXPECT_LT(max_gyr, 2000.0 / 32768 * kRadPerDeg);  // one LSB
   EXPECT_LT(max_acc, 16 * 9.80665 / 32768);
   EXPECT_LT(max_q, 1e-3);
 }

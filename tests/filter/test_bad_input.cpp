@@ -4,9 +4,9 @@
 
 #include <limits>
 
+#include "mocap/eval/madgwick.hpp"
+#include "mocap/eval/mahony.hpp"
 #include "mocap/filter/attitude_filter.hpp"
-#include "mocap/filter/madgwick.hpp"
-#include "mocap/filter/mahony.hpp"
 #include "synth.hpp"
 
 namespace mocap::test {

@@ -2,8 +2,8 @@
 // and track a rotation (loose bounds: these are the reference methods, not ours).
 #include <gtest/gtest.h>
 
-#include "mocap/filter/madgwick.hpp"
-#include "mocap/filter/mahony.hpp"
+#include "mocap/eval/madgwick.hpp"
+#include "mocap/eval/mahony.hpp"
 #include "synth.hpp"
 
 namespace mocap::test {

@@ -7,8 +7,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "mocap/filter/broad_csv.hpp"
-#include "mocap/filter/broad_metric.hpp"
+#include "mocap/core/units.hpp"
+#include "mocap/eval/broad_csv.hpp"
+#include "mocap/eval/broad_metric.hpp"
 
 namespace mocap {
 namespace {
@@ -101,22 +102,22 @@ TEST(BroadMetric, SplitsHeadingAndInclination) {
   double t, h, i;
   // A pure rotation about earth z of 5 deg is all heading.
   attitude_error_angles(
-      Eigen::Quaterniond(Eigen::AngleAxisd(5 * M_PI / 180, Eigen::Vector3d::UnitZ())) * ref, ref, t,
+      Eigen::Quaterniond(Eigen::AngleAxisd(5 * kRadPerDeg, Eigen::Vector3d::UnitZ())) * ref, ref, t,
       h, i);
-  EXPECT_NEAR(t * 180 / M_PI, 5.0, 1e-9);
-  EXPECT_NEAR(h * 180 / M_PI, 5.0, 1e-9);
+  EXPECT_NEAR(t * kDegPerRad, 5.0, 1e-9);
+  EXPECT_NEAR(h * kDegPerRad, 5.0, 1e-9);
   EXPECT_NEAR(i, 0.0, 1e-7);
   attitude_error_angles(
-      Eigen::Quaterniond(Eigen::AngleAxisd(3 * M_PI / 180, Eigen::Vector3d::UnitX())) * ref, ref, t,
+      Eigen::Quaterniond(Eigen::AngleAxisd(3 * kRadPerDeg, Eigen::Vector3d::UnitX())) * ref, ref, t,
       h, i);
-  EXPECT_NEAR(i * 180 / M_PI, 3.0, 1e-9);
+  EXPECT_NEAR(i * kDegPerRad, 3.0, 1e-9);
   EXPECT_NEAR(h, 0.0, 1e-9);
   // score_trial only counts movement samples with a finite reference.
   BroadTrial tr;
   std::string err;
   ASSERT_TRUE(parse_broad_csv(kGood, tr, err));
   std::vector<Eigen::Quaterniond> est(
-      3, Eigen::Quaterniond(Eigen::AngleAxisd(2 * M_PI / 180, Eigen::Vector3d::UnitZ())));
+      3, Eigen::Quaterniond(Eigen::AngleAxisd(2 * kRadPerDeg, Eigen::Vector3d::UnitZ())));
   est[0] = Eigen::Quaterniond(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitX()));  // not moving
   const AttitudeErrors e = score_trial(tr, est);
   EXPECT_EQ(e.n, 1u);

@@ -3,8 +3,8 @@
 // docs/filter.md (small margin).
 #include <gtest/gtest.h>
 
-#include "mocap/filter/broad_metric.hpp"
-#include "mocap/filter/run_trial.hpp"
+#include "mocap/eval/broad_metric.hpp"
+#include "mocap/eval/run_trial.hpp"
 
 namespace mocap {
 namespace {

@@ -6,8 +6,8 @@
 #include <string>
 #include <string_view>
 
-#include "mocap/filter/broad_csv.hpp"
-#include "mocap/filter/run_trial.hpp"
+#include "mocap/eval/broad_csv.hpp"
+#include "mocap/eval/run_trial.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   mocap::BroadTrial trial;

@@ -15,7 +15,7 @@
 #include <thread>
 #include <vector>
 
-#include "mocap/drivers/sim_encoder.hpp"
+#include "mocap/devsim/sim_encoder.hpp"
 
 namespace mocap::reliability {
 

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 
+#include "mocap/core/units.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/skeleton/bvh.hpp"
 
@@ -38,7 +39,7 @@ std::pair<double, double> worst_difference(const Performer& a, const Performer& 
     b.truth_at(t + b_minus_a_s, fb);
     for (int s = 0; s < kSegmentCount; ++s)
       worst_deg = std::max(
-          worst_deg, fa.q_earth_segment[s].angularDistance(fb.q_earth_segment[s]) * 180 / M_PI);
+          worst_deg, fa.q_earth_segment[s].angularDistance(fb.q_earth_segment[s]) * kDegPerRad);
     worst_m = std::max(worst_m, (fa.p_earth_segment_m[0] - fb.p_earth_segment_m[0]).norm());
   }
   return {worst_deg, worst_m};
@@ -106,7 +107,7 @@ TEST(BvhMotion, CalibrationProcedureBeforeAFileByName) {
     max_knee_deg =
         std::max(max_knee_deg, f.q_parent_segment[index(Segment::shank_l)].angularDistance(
                                    Eigen::Quaterniond::Identity()) *
-                                   180 / M_PI);
+                                   kDegPerRad);
   }
   EXPECT_LT(max_ankle_shift_m, 1e-6);
   EXPECT_GT(max_knee_deg, 40.0);

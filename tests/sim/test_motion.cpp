@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "mocap/core/units.hpp"
 #include "mocap/sim/motion.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 
@@ -11,7 +12,7 @@ namespace mocap::sim {
 namespace {
 
 double angle_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
-  return Eigen::AngleAxisd(a.conjugate() * b).angle() * 180 / M_PI;
+  return Eigen::AngleAxisd(a.conjugate() * b).angle() * kDegPerRad;
 }
 
 TEST(Motion, EveryBuiltInStartsInTheNPoseAndIsFinite) {

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "mocap/core/units.hpp"
 #include "mocap/sim/performer.hpp"
 
 namespace mocap::sim {
@@ -36,7 +37,7 @@ TEST(SensorModel, AtRestAccelerometerReadsGravityUpAndMagHasDip) {
     EXPECT_NEAR(f_earth.head<2>().norm(), 0, 1e-6);
     const Eigen::Vector3d b_earth = k.q_earth_sensor * s.mag_uT;
     EXPECT_NEAR(b_earth.norm(), 50, 1e-6);
-    EXPECT_NEAR(std::atan2(-b_earth.z(), b_earth.head<2>().norm()) * 180 / M_PI, 60, 1e-6);
+    EXPECT_NEAR(std::atan2(-b_earth.z(), b_earth.head<2>().norm()) * kDegPerRad, 60, 1e-6);
     EXPECT_NEAR(b_earth.y(), 25, 1e-6);  // magnetic north = earth y (declination 0)
     EXPECT_TRUE(s.flags & kFlagSynthetic);
     EXPECT_EQ(s.valid, kFieldGyr | kFieldAcc | kFieldMag);
@@ -63,7 +64,7 @@ TEST(SensorModel, IdealGyroIntegratesToTrueOrientation) {
   }
   EXPECT_GT(max_rate, 1.0);  // the motion really rotates the arm
   const Eigen::Quaterniond truth = perf.sensor_kinematics(id, t1).q_earth_sensor;
-  EXPECT_LT(Eigen::AngleAxisd(q.conjugate() * truth).angle() * 180 / M_PI, 0.05);
+  EXPECT_LT(Eigen::AngleAxisd(q.conjugate() * truth).angle() * kDegPerRad, 0.05);
 }
 
 // Rotating the ideal accelerometer into earth, removing gravity and integrating twice reproduces
@@ -161,7 +162,7 @@ TEST(SensorErrorModel, BiasNoiseAndScaleFollowTheParameters) {
     SensorErrorModel m(p, 100, 1000 + s);
     sum_sq += m.gyr_bias_rad_s().squaredNorm();
   }
-  const double sigma_dps = std::sqrt(sum_sq / (3 * n)) * 180 / M_PI;
+  const double sigma_dps = std::sqrt(sum_sq / (3 * n)) * kDegPerRad;
   EXPECT_NEAR(sigma_dps, p.gyr_bias_sigma_dps, 0.1 * p.gyr_bias_sigma_dps);
   // Per-sample gyro noise around the bias: sigma = density * sqrt(rate).
   SensorErrorModel m(p, 100, 7);
@@ -175,7 +176,7 @@ TEST(SensorErrorModel, BiasNoiseAndScaleFollowTheParameters) {
     acc_sq += (s.acc_m_s2 - Eigen::Vector3d(0, 0, p.gravity_m_s2)).squaredNorm();
   }
   mean /= samples;
-  EXPECT_LT((mean - m.gyr_bias_rad_s()).norm() * 180 / M_PI, 0.02);
+  EXPECT_LT((mean - m.gyr_bias_rad_s()).norm() * kDegPerRad, 0.02);
   // Accelerometer error: bias (0.05) + scale (0.5% of g) + noise, per axis well under 0.3 m/s^2.
   EXPECT_LT(std::sqrt(acc_sq / samples), 0.3);
   EXPECT_GT(std::sqrt(acc_sq / samples), 0.001);
@@ -195,7 +196,7 @@ TEST(SensorModel, SaturationClampsAndFlags) {
   k.w_sensor_rad_s = Eigen::Vector3d(50, 0, 0);  // 2865 deg/s > 2000
   ImuSample s;
   m.measure(k, Eigen::Vector3d(0, 20, -40), 0.01, s);
-  EXPECT_NEAR(s.gyr_rad_s.x(), 2000 * M_PI / 180, 1e-9);
+  EXPECT_NEAR(s.gyr_rad_s.x(), 2000 * kRadPerDeg, 1e-9);
   EXPECT_TRUE(s.flags & kFlagSaturated);
 }
 

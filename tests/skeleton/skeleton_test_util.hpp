@@ -26,7 +26,7 @@ inline Eigen::Quaterniond random_small_rotation(std::mt19937& rng, double max_de
   std::uniform_real_distribution<double> u(-1, 1);
   Eigen::Vector3d axis(u(rng), u(rng), u(rng));
   if (axis.norm() < 1e-6) axis = Eigen::Vector3d::UnitX();
-  const double ang = std::abs(u(rng)) * max_deg * kDegToRad;
+  const double ang = std::abs(u(rng)) * max_deg * kRadPerDeg;
   return Eigen::Quaterniond(Eigen::AngleAxisd(ang, axis.normalized()));
 }
 

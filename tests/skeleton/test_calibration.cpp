@@ -37,7 +37,7 @@ void capture(Calibrator& cal, const Rig& rig, CalibrationPose pose, double headi
       const Eigen::Quaterniond qs = rig.sensor(s, seg);
       // Specific force: +g up in the earth frame, seen in the sensor frame (optionally tilted).
       const Eigen::Vector3d f_earth =
-          Eigen::AngleAxisd(acc_tilt_deg * kDegToRad, Eigen::Vector3d::UnitX()) *
+          Eigen::AngleAxisd(acc_tilt_deg * kRadPerDeg, Eigen::Vector3d::UnitX()) *
           Eigen::Vector3d(0, 0, 9.80665);
       const Eigen::Vector3d acc = qs.conjugate() * f_earth;
       cal.add_sample(s, qs, t, with_acc ? &acc : nullptr);
@@ -64,7 +64,7 @@ TEST(Calibration, NPoseRecoversArbitraryMountingsWithExplicitHeading) {
   o.heading = HeadingSource::explicit_heading;
   o.explicit_heading_deg = 37;
   Calibrator cal(RigMapping::full(), o);
-  capture(cal, rig, CalibrationPose::npose, 37 * kDegToRad, rng, 0, 0);
+  capture(cal, rig, CalibrationPose::npose, 37 * kRadPerDeg, rng, 0, 0);
   const auto r = cal.finish();
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_NEAR(r.calibration.heading_deg, 37, 1e-9);
@@ -76,7 +76,7 @@ TEST(Calibration, TPoseRecoversMountingsWithPelvisHeading) {
   Rig rig(rng);
   rig.q_sensor_segment[0] = yaw_rotation(0);  // pelvis sensor: x forward (the source's premise)
   Calibrator cal(RigMapping::full());         // heading from the pelvis sensor
-  capture(cal, rig, CalibrationPose::tpose, -120 * kDegToRad, rng, 0, 0);
+  capture(cal, rig, CalibrationPose::tpose, -120 * kRadPerDeg, rng, 0, 0);
   const auto r = cal.finish();
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_NEAR(r.calibration.heading_deg, -120, 1e-6);
@@ -89,7 +89,7 @@ TEST(Calibration, ArmSwingFindsHeadingWithEverySensorMountedArbitrarily) {
   CalibratorOptions o;
   o.heading = HeadingSource::arm_swing;
   Calibrator cal(RigMapping::full(), o);
-  const double heading = 71 * kDegToRad;
+  const double heading = 71 * kRadPerDeg;
   capture(cal, rig, CalibrationPose::npose, heading, rng, 0.3, 0);
   auto r = cal.finish();
   EXPECT_EQ(r.status, CalibrationStatus::need_tpose) << r.message;
@@ -119,16 +119,16 @@ TEST(Calibration, MountNormalsAverageOutEachSensorsMisalignment) {
     o.mount_normal_body[s] = n;
     const double mis_deg = (s % 2 ? 4.0 : -4.0) * (s == 0 ? -1 : 1);
     const Eigen::Quaterniond q_segment_sensor =
-        yaw_rotation(mis_deg * kDegToRad) *
+        yaw_rotation(mis_deg * kRadPerDeg) *
         Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n) *
         Eigen::Quaterniond(Eigen::AngleAxisd(roll(rng), Eigen::Vector3d::UnitZ()));
     rig.q_sensor_segment[s] = q_segment_sensor.conjugate();
     if (s != index(Segment::head)) ++used;
   }
   ASSERT_EQ(used % 2, 1);  // odd: the +-4 deg leave a residual of 4/used deg at most
-  rig.q_drift[index(Segment::hand_r)] = yaw_rotation(25 * kDegToRad);
+  rig.q_drift[index(Segment::hand_r)] = yaw_rotation(25 * kRadPerDeg);
   Calibrator cal(RigMapping::full(), o);
-  capture(cal, rig, CalibrationPose::npose, 20 * kDegToRad, rng, 0, 0);
+  capture(cal, rig, CalibrationPose::npose, 20 * kRadPerDeg, rng, 0, 0);
   const auto r = cal.finish();
   ASSERT_TRUE(r.ok()) << r.message;
   EXPECT_NEAR(r.calibration.heading_deg, 20, 0.6);
@@ -138,7 +138,7 @@ TEST(Calibration, MountNormalsAverageOutEachSensorsMisalignment) {
   CalibratorOptions none = o;
   none.mount_normal_body.fill(Eigen::Vector3d::Zero());
   Calibrator cal2(RigMapping::full(), none);
-  capture(cal2, rig, CalibrationPose::npose, 20 * kDegToRad, rng, 0, 0);
+  capture(cal2, rig, CalibrationPose::npose, 20 * kRadPerDeg, rng, 0, 0);
   const auto r2 = cal2.finish();
   EXPECT_FALSE(r2.ok());
   EXPECT_NE(r2.message.find("mount normal"), std::string::npos) << r2.message;
@@ -212,13 +212,13 @@ TEST(Calibration, HeadingResetRemovesPerSensorYawDrift) {
   // Each sensor's heading drifts differently.
   std::uniform_real_distribution<double> d(-30, 30);
   for (auto& q : rig.q_drift)
-    q = yaw_rotation(d(rng) * kDegToRad);
+    q = yaw_rotation(d(rng) * kRadPerDeg);
   const double drifted = worst_segment_error_deg(c, rig, rng);
   EXPECT_GT(drifted, 10);
   // Reset while standing in N-pose facing 25 deg.
   std::array<Eigen::Quaterniond, kSegmentCount> now;
   std::array<bool, kSegmentCount> have;
-  const Eigen::Quaterniond body = yaw_rotation(25 * kDegToRad);
+  const Eigen::Quaterniond body = yaw_rotation(25 * kRadPerDeg);
   for (int s = 0; s < kSegmentCount; ++s) {
     now[s] = rig.sensor(s, body);
     have[s] = true;

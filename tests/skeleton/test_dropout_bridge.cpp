@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "mocap/core/units.hpp"
 #include "mocap/skeleton/dropout_bridge.hpp"
 #include "mocap/skeleton/forward_kinematics.hpp"
 #include "mocap/skeleton/quat_math.hpp"
@@ -75,10 +76,10 @@ TEST(DropoutBridge, SlerpsAShortGapAndKeepsALongOneHeld) {
     const Eigen::Quaterniond truth = forearm_at(t_s);
     worst_in_deg =
         std::max(worst_in_deg,
-                 truth.angularDistance(from_wxyz(in[k].q_earth_segment[kForearm])) * 180 / M_PI);
+                 truth.angularDistance(from_wxyz(in[k].q_earth_segment[kForearm])) * kDegPerRad);
     worst_out_deg =
         std::max(worst_out_deg,
-                 truth.angularDistance(from_wxyz(out[k].q_earth_segment[kForearm])) * 180 / M_PI);
+                 truth.angularDistance(from_wxyz(out[k].q_earth_segment[kForearm])) * kDegPerRad);
     // The elbow's joint rotation and the wrist's position follow the bridged forearm.
     EXPECT_LT(from_wxyz(out[k].q_parent_segment[kForearm])
                   .angularDistance(from_wxyz(out[k].q_earth_segment[kForearm])),

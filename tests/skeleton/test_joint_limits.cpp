@@ -10,7 +10,7 @@ namespace mocap {
 namespace {
 
 Eigen::Quaterniond rot(int axis, double deg) {
-  return axis_rotation(axis, deg * kDegToRad);
+  return axis_rotation(axis, deg * kRadPerDeg);
 }
 
 TEST(JointLimits, DefaultsAreValidAndMirrored) {

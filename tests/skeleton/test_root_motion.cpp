@@ -12,14 +12,14 @@ namespace {
 // flexed) to -A, the swing leg from -A to +A with the knee bent so its foot stays clear; feet
 // stay flat. Walks along the earth direction `heading_rad`.
 std::array<Eigen::Quaterniond, kSegmentCount> gait_pose(double t_half_cycles, double heading_rad) {
-  const double amp = 20 * kDegToRad;
+  const double amp = 20 * kRadPerDeg;
   const int half = static_cast<int>(std::floor(t_half_cycles));
   const double u = t_half_cycles - half;
   const bool left_stance = half % 2 == 0;
   const double th_stance = amp * (1 - 2 * u);
   const double th_swing = -th_stance;
-  const double knee = std::max(60 * kDegToRad * std::sin(M_PI * u),
-                               2 * th_swing + 8 * kDegToRad * std::sin(M_PI * u));
+  const double knee = std::max(60 * kRadPerDeg * std::sin(M_PI * u),
+                               2 * th_swing + 8 * kRadPerDeg * std::sin(M_PI * u));
   std::array<Eigen::Quaterniond, kSegmentCount> j;
   j.fill(Eigen::Quaterniond::Identity());
   j[0] = yaw_rotation(heading_rad);
@@ -40,7 +40,7 @@ std::array<Eigen::Quaterniond, kSegmentCount> gait_pose(double t_half_cycles, do
 TEST(RootMotion, WalkingAdvancesByTheStepLengths) {
   const BodyModel model;
   Skeleton sk(model, default_joint_limits(), RigMapping::full());
-  const double heading = 30 * kDegToRad;
+  const double heading = 30 * kRadPerDeg;
   const int steps = 8, per_step = 100;
   PoseFrame f;
   Eigen::Vector3d start;
@@ -76,7 +76,7 @@ TEST(RootMotion, WalkingAdvancesByTheStepLengths) {
   }
   const double leg_m =
       model.bone_length_m(index(Segment::shank_l)) + model.bone_length_m(index(Segment::foot_l));
-  const double expected = steps * 2 * leg_m * std::sin(20 * kDegToRad);
+  const double expected = steps * 2 * leg_m * std::sin(20 * kRadPerDeg);
   const Eigen::Vector3d travel = sk.p_earth_segment_m()[0] - start;
   EXPECT_NEAR(travel.head<2>().norm(), expected, 0.03 * expected);
   // In the walking direction.

@@ -75,7 +75,7 @@ TEST(Skeleton, UntrackedSegmentsAreInterpolatedOrFollowTheParent) {
   rig.sensor_for_segment[index(Segment::torso)] = -1;
   rig.sensor_for_segment[index(Segment::hand_l)] = -1;
   Skeleton sk(BodyModel{}, default_joint_limits(), rig);
-  const Eigen::Quaterniond bent = axis_rotation(1, 60 * kDegToRad);
+  const Eigen::Quaterniond bent = axis_rotation(1, 60 * kRadPerDeg);
   for (int s = 0; s < kSegmentCount; ++s)
     sk.set_sensor_orientation(
         s,
@@ -86,7 +86,8 @@ TEST(Skeleton, UntrackedSegmentsAreInterpolatedOrFollowTheParent) {
   PoseFrame f;
   sk.solve(f);
   const int torso = index(Segment::torso);
-  EXPECT_LT(angle_between_deg(sk.q_earth_segment()[torso], axis_rotation(1, 30 * kDegToRad)), 1e-9);
+  EXPECT_LT(angle_between_deg(sk.q_earth_segment()[torso], axis_rotation(1, 30 * kRadPerDeg)),
+            1e-9);
   EXPECT_EQ(f.segment_flags[torso] & kSegInferred, uint32_t{kSegInferred});
   EXPECT_LT(angle_between_deg(sk.q_earth_segment()[index(Segment::hand_l)], bent), 1e-9);
   EXPECT_EQ(f.segment_flags[index(Segment::pelvis)] & kSegTracked, uint32_t{kSegTracked});
@@ -100,18 +101,18 @@ TEST(Skeleton, ReportsViolationsWithoutChangingThePose) {
     for (int s = 0; s < kSegmentCount; ++s)
       sk.set_sensor_orientation(s, Eigen::Quaterniond::Identity(), 0);
     // Knee bent forward by 35 deg: 30 deg beyond the 5 deg hyperextension.
-    sk.set_sensor_orientation(index(Segment::shank_l), axis_rotation(1, -35 * kDegToRad), 0);
+    sk.set_sensor_orientation(index(Segment::shank_l), axis_rotation(1, -35 * kRadPerDeg), 0);
     PoseFrame f;
     sk.solve(f);
     const int k = index(Segment::shank_l);
     EXPECT_NEAR(f.joint_violation_deg[k], 30, 1e-3);
     EXPECT_TRUE(f.segment_flags[k] & kSegLimitViolated);
     EXPECT_EQ(f.joint_violation_deg[index(Segment::shank_r)], 0);
-    EXPECT_NEAR(angle_between_deg(sk.q_earth_segment()[k], axis_rotation(1, -35 * kDegToRad)), 0,
+    EXPECT_NEAR(angle_between_deg(sk.q_earth_segment()[k], axis_rotation(1, -35 * kRadPerDeg)), 0,
                 1e-6);
     // The drift signal accumulates while the violation persists.
     for (int t = 1; t <= 200; ++t) {
-      sk.set_sensor_orientation(k, axis_rotation(1, -35 * kDegToRad), t * 20 * kMs);
+      sk.set_sensor_orientation(k, axis_rotation(1, -35 * kRadPerDeg), t * 20 * kMs);
       sk.solve(f);
     }
     EXPECT_GT(sk.drift_signal_deg(), 20);
@@ -144,7 +145,7 @@ TEST(Skeleton, RejectsNonFiniteInputAndFlagsStaleSensors) {
 
 TEST(Skeleton, SilentSensorIsInferredAndHeadingResetFacesTarget) {
   Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full());
-  const Eigen::Quaterniond facing = yaw_rotation(50 * kDegToRad);
+  const Eigen::Quaterniond facing = yaw_rotation(50 * kRadPerDeg);
   for (int s = 0; s < kSegmentCount; ++s)
     sk.set_sensor_orientation(s, facing, 0);
   sk.set_sensor_orientation(index(Segment::hand_r), axis_rotation(0, 1.0), 0);

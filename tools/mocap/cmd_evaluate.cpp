@@ -6,9 +6,9 @@
 
 #include "commands.hpp"
 #include "mocap/core/cli_args.hpp"
-#include "mocap/filter/broad_metric.hpp"
+#include "mocap/eval/broad_metric.hpp"
+#include "mocap/eval/run_trial.hpp"
 #include "mocap/filter/filter_param_names.hpp"
-#include "mocap/filter/run_trial.hpp"
 
 namespace mocap::cmd {
 namespace {

@@ -1,6 +1,6 @@
 // mocap simulate: emulates a sensor. Emits a protocol's exact bytes for a known motion on a
 // pseudo-terminal (printing its path), as UDP datagrams, or into a capture file, and answers
-// configuration commands the way the device does. Built on mocap/drivers/sim_device.hpp.
+// configuration commands the way the device does. Built on mocap/devsim/sim_device.hpp.
 #include <signal.h>
 
 #include <cstdio>
@@ -9,7 +9,7 @@
 
 #include "commands.hpp"
 #include "mocap/core/cli_args.hpp"
-#include "mocap/drivers/sim_device.hpp"
+#include "mocap/devsim/sim_device.hpp"
 
 namespace mocap::cmd {
 

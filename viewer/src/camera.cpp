@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mocap/core/units.hpp"
+
 namespace mocap::viewer {
 namespace {
-constexpr float kDegToRad = 3.14159265358979f / 180.0f;
+constexpr float kRadPerDegF = static_cast<float>(kRadPerDeg);  // the viewer works in float
 }
 
 OrbitCamera OrbitCamera::framing(int avatars) {
@@ -22,7 +24,7 @@ OrbitCamera OrbitCamera::framing(int avatars) {
 }
 
 Eigen::Vector3f OrbitCamera::eye_m() const {
-  const float y = yaw_deg * kDegToRad, p = pitch_deg * kDegToRad;
+  const float y = yaw_deg * kRadPerDegF, p = pitch_deg * kRadPerDegF;
   return target_m + distance_m * Eigen::Vector3f(std::cos(p) * std::cos(y),
                                                  std::cos(p) * std::sin(y), std::sin(p));
 }
@@ -46,7 +48,7 @@ Eigen::Matrix4f OrbitCamera::view() const {
 
 Eigen::Matrix4f OrbitCamera::projection(float aspect) const {
   const float near_m = std::max(0.02f, distance_m * 0.01f), far_m = distance_m * 20 + 50;
-  const float t = 1.0f / std::tan(0.5f * fov_y_deg * kDegToRad);
+  const float t = 1.0f / std::tan(0.5f * fov_y_deg * kRadPerDegF);
   Eigen::Matrix4f m = Eigen::Matrix4f::Zero();
   m(0, 0) = t / aspect;
   m(1, 1) = t;
@@ -65,7 +67,7 @@ void OrbitCamera::pan(float dx_px, float dy_px, int viewport_h) {
   const Eigen::Matrix4f v = view();
   const Eigen::Vector3f right = v.block<1, 3>(0, 0).transpose();
   const Eigen::Vector3f up = v.block<1, 3>(1, 0).transpose();
-  const float m_per_px = 2 * distance_m * std::tan(0.5f * fov_y_deg * kDegToRad) /
+  const float m_per_px = 2 * distance_m * std::tan(0.5f * fov_y_deg * kRadPerDegF) /
                          static_cast<float>(std::max(1, viewport_h));
   target_m += m_per_px * (-dx_px * right + dy_px * up);
 }

@@ -109,6 +109,14 @@ class Pipeline final : public SampleSink {
 
   std::atomic<RecordTap*> tap_{nullptr};
   std::atomic<int> tap_users_{0};
+  /// Calls f(tap) when a recording tap is installed, counted in tap_users_ so that
+  /// set_record_tap() can wait until no caller still holds the tap it replaced.
+  template <class F>
+  void with_tap(F&& f) {
+    tap_users_.fetch_add(1);
+    if (RecordTap* t = tap_.load()) f(*t);
+    tap_users_.fetch_sub(1);
+  }
 
   mutable std::mutex status_mu_;
   PipelineStatus status_;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <span>
@@ -95,5 +96,11 @@ class Device {
 /// unknown protocol or malformed spec.
 std::unique_ptr<StreamDecoder> make_decoder(const DeviceSpec& spec);
 std::unique_ptr<Device> make_device(const DeviceSpec& spec, Logger log);
+
+class ByteTransport;
+/// make_device() with an explicit transport factory (simulated transports, tests).
+std::unique_ptr<Device> make_device_with_transport(
+    const DeviceSpec& spec, Logger log,
+    std::function<std::unique_ptr<ByteTransport>(std::string& err)> open);
 
 }  // namespace mocap

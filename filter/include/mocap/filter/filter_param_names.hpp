@@ -1,5 +1,4 @@
-// Name-based access to FilterParams ("tau_mag_s=12") for command-line overrides and docs, and
-// the location of the shared BROAD trials.
+// Name-based access to FilterParams ("tau_mag_s=12") for command-line overrides and docs.
 #pragma once
 
 #include <string>
@@ -14,8 +13,5 @@ bool set_filter_param(FilterParams& p, std::string_view assignment, std::string&
 
 /// "name=value" lines of every parameter (for reports).
 std::string describe_filter_params(const FilterParams& p);
-
-/// <source>/../shared/datasets/broad, where the development trials live.
-std::string default_broad_dir();
 
 }  // namespace mocap

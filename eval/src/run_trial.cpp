@@ -1,10 +1,10 @@
 // Drives the selected algorithm sample by sample over a BROAD-layout trial.
-#include "mocap/filter/run_trial.hpp"
+#include "mocap/eval/run_trial.hpp"
 
 #include <cmath>
 
-#include "mocap/filter/madgwick.hpp"
-#include "mocap/filter/mahony.hpp"
+#include "mocap/eval/madgwick.hpp"
+#include "mocap/eval/mahony.hpp"
 
 namespace mocap {
 

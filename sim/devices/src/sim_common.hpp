@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "mocap/drivers/sim_encoder.hpp"
+#include "mocap/devsim/sim_encoder.hpp"
 
 namespace mocap {
 

@@ -1,6 +1,6 @@
 // Madgwick gradient-descent filter: one normalised gradient step of the gravity (and field)
 // objective per gyro sample, Euler-integrated with the gyro rate (as in the paper).
-#include "mocap/filter/madgwick.hpp"
+#include "mocap/eval/madgwick.hpp"
 
 #include <cmath>
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "mocap/filter/broad_csv.hpp"
+#include "mocap/eval/broad_csv.hpp"
 
 namespace mocap {
 

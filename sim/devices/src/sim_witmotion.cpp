@@ -35,7 +35,7 @@ class WitmotionEncoder final : public ProtocolEncoder {
       witmotion::encode(p, out);
     }
     if (rsw & rsw_bit(kAcc)) put(kAcc, s.acc_m_s2 * (32768.0 / (16 * kStandardGravity_m_s2)), out);
-    if (rsw & rsw_bit(kGyr)) put(kGyr, s.gyr_rad_s * (180 / M_PI) * (32768.0 / 2000), out);
+    if (rsw & rsw_bit(kGyr)) put(kGyr, s.gyr_rad_s * kDegPerRad * (32768.0 / 2000), out);
     const auto& q = s.q_device_sensor;
     if (rsw & rsw_bit(kAngle)) {
       const Eigen::Matrix3d r = q.toRotationMatrix();

@@ -1,5 +1,5 @@
 // Mahony complementary filter: correction w_mes = sum v_i x v_hat_i, PI feedback, Euler step.
-#include "mocap/filter/mahony.hpp"
+#include "mocap/eval/mahony.hpp"
 
 #include <cmath>
 

@@ -7,8 +7,8 @@
 #include <deque>
 #include <memory>
 
+#include "mocap/devsim/sim_device.hpp"
 #include "mocap/drivers/device.hpp"
-#include "mocap/drivers/sim_device.hpp"
 #include "mocap/drivers/transport.hpp"
 
 namespace mocap {
@@ -28,10 +28,5 @@ class SimReportTransport final : public ByteTransport {
   std::deque<std::vector<uint8_t>> queue_;  ///< replies and reports waiting to be read
   int64_t t0_ns_ = -1, t_device_ns_ = 0;
 };
-
-/// make_device() with an explicit transport factory (simulated transports, tests).
-std::unique_ptr<Device> make_device_with_transport(
-    const DeviceSpec& spec, Logger log,
-    std::function<std::unique_ptr<ByteTransport>(std::string& err)> open);
 
 }  // namespace mocap

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "mocap/core/imu_sample.hpp"
+#include "mocap/eval/broad_csv.hpp"
 #include "mocap/filter/attitude_filter.hpp"
-#include "mocap/filter/broad_csv.hpp"
 
 namespace mocap {
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <deque>
 
+#include "mocap/core/units.hpp"
 #include "mocap/drivers/joycon.hpp"
 #include "sim_common.hpp"
 
@@ -29,7 +30,7 @@ class JoyconEncoder final : public ProtocolEncoder {
     for (int k = 0; k < 3; ++k) {
       const double sign = k == 0 ? 1.0 : yz_sign_;
       const double g = sign * s.acc_m_s2[k] / 9.80665;
-      const double dps = sign * s.gyr_rad_s[k] * 180 / M_PI;
+      const double dps = sign * s.gyr_rad_s[k] * kDegPerRad;
       m.acc[k] =
           imu_ ? sat16(g * 4096.0 * (cal_.acc_sens[k] - cal_.acc_origin[k]) / cal_.acc_sens[k]) : 0;
       m.gyr[k] =

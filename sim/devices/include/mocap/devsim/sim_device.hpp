@@ -10,7 +10,7 @@
 #include <string>
 #include <thread>
 
-#include "mocap/drivers/sim_encoder.hpp"
+#include "mocap/devsim/sim_encoder.hpp"
 
 namespace mocap {
 

@@ -1,5 +1,5 @@
 // BROAD error metric (ported from the benchmark's description in the dataset README).
-#include "mocap/filter/broad_metric.hpp"
+#include "mocap/eval/broad_metric.hpp"
 
 #include <algorithm>
 #include <cmath>

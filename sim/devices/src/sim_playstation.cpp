@@ -3,6 +3,7 @@
 // returns (so the decoder only gets truth back if it applies the calibration correctly).
 #include <cmath>
 
+#include "mocap/core/units.hpp"
 #include "mocap/drivers/playstation.hpp"
 #include "sim_common.hpp"
 
@@ -36,7 +37,7 @@ class PlaystationEncoder final : public ProtocolEncoder {
     const uint64_t ts = static_cast<uint64_t>(std::llround(ticks)) % timestamp_modulus(model_);
     std::array<int16_t, 3> g{}, a{};
     for (int k = 0; k < 3; ++k) {
-      g[k] = sat16(s.gyr_rad_s[k] * 180 / M_PI / scale_.gyr_dps_per_lsb[k]);
+      g[k] = sat16(s.gyr_rad_s[k] * kDegPerRad / scale_.gyr_dps_per_lsb[k]);
       a[k] = sat16(s.acc_m_s2[k] / 9.80665 / scale_.acc_g_per_lsb[k] + scale_.acc_bias[k]);
     }
     if (model_ == Model::kDs4) {

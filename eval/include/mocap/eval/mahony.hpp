@@ -6,7 +6,7 @@
 #include <Eigen/Geometry>
 
 #include "mocap/core/imu_sample.hpp"
-#include "mocap/filter/baseline_common.hpp"
+#include "mocap/eval/baseline_common.hpp"
 
 namespace mocap {
 

@@ -1,5 +1,5 @@
 // Simulated HID transport: paces the encoder's reports in real time (see sim_transport.hpp).
-#include "mocap/drivers/sim_transport.hpp"
+#include "mocap/devsim/sim_transport.hpp"
 
 #include <poll.h>
 

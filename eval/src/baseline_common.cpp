@@ -1,5 +1,5 @@
 // Input handling and initialisation shared by the Madgwick and Mahony baselines.
-#include "mocap/filter/baseline_common.hpp"
+#include "mocap/eval/baseline_common.hpp"
 
 #include <algorithm>
 #include <cmath>

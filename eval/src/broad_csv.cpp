@@ -1,5 +1,5 @@
 // Parses BROAD-layout IMU CSVs (plain or gzip) with line-precise error messages.
-#include "mocap/filter/broad_csv.hpp"
+#include "mocap/eval/broad_csv.hpp"
 
 #include <zlib.h>
 
@@ -8,6 +8,10 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+
+#ifndef MOCAP_BROAD_DIR
+#define MOCAP_BROAD_DIR "../shared/datasets/broad"
+#endif
 
 namespace mocap {
 namespace {
@@ -186,6 +190,10 @@ std::vector<std::string> list_broad_trials(const std::string& dir) {
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+std::string default_broad_dir() {
+  return MOCAP_BROAD_DIR;
 }
 
 }  // namespace mocap

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "mocap/core/units.hpp"
-#include "mocap/drivers/sim_device.hpp"
+#include "mocap/devsim/sim_device.hpp"
 
 namespace mocap {
 namespace {

@@ -1,6 +1,6 @@
 // The simulated-device thread: truth -> encoder -> pty/UDP at the device's rate, host commands
 // answered, faults injected on request (see sim_device.hpp).
-#include "mocap/drivers/sim_device.hpp"
+#include "mocap/devsim/sim_device.hpp"
 
 #include <time.h>
 

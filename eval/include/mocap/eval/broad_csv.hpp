@@ -35,4 +35,8 @@ bool read_broad_csv(const std::string& path, BroadTrial& out, std::string& error
 /// Lists the *.csv / *.csv.gz files of a directory, sorted by name.
 std::vector<std::string> list_broad_trials(const std::string& dir);
 
+/// <source>/../shared/datasets/broad, where the development trials live (the MOCAP_BROAD_DIR
+/// compile definition of mocap_eval).
+std::string default_broad_dir();
+
 }  // namespace mocap
