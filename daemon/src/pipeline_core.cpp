@@ -79,6 +79,7 @@ void PipelineCore::advance_clock_to(int64_t t_ns) {
 
 void PipelineCore::request_calibration(CalibrationPose pose, int64_t t_now_ns) {
   calibrating_ = true;
+  state_changed_ = true;
   calib_pose_ = pose;
   calib_at_ns_ = t_now_ns + static_cast<int64_t>(calib_.countdown_s * 1e9);
   maybe_finish_calibration(t_now_ns);
@@ -88,11 +89,14 @@ void PipelineCore::maybe_finish_calibration(int64_t t_now_ns) {
   if (calibrating_ && t_now_ns >= calib_at_ns_) {
     engine_.calibrate(calib_pose_);
     calibrating_ = false;
+    state_changed_ = true;
   }
 }
 
 void PipelineCore::set_frame_flag(uint32_t flag, bool on) {
-  extra_flags_ = on ? (extra_flags_ | flag) : (extra_flags_ & ~flag);
+  const uint32_t flags = on ? (extra_flags_ | flag) : (extra_flags_ & ~flag);
+  state_changed_ = state_changed_ || flags != extra_flags_;
+  extra_flags_ = flags;
 }
 
 void PipelineCore::set_external_counters(int sensor, uint32_t drops, uint32_t errors) {
@@ -111,14 +115,16 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
   const int64_t stale_ns = static_cast<int64_t>(cfg_.stale_after_ms * 1e6);
   // Every frame has a time of its own: the newest sample's (a frame carries the pose of that
   // time; docs/accuracy.md shows holding it beats predicting). No sample since the last frame:
-  // no new pose, no frame, unless the sensors fell silent for stale_after_ms, when a frame at
-  // the clock's time reports them stale.
+  // no new pose, no frame, unless a frame flag or the calibration state changed or the sensors
+  // fell silent for stale_after_ms: then a frame at the clock's time says so.
   int64_t t_frame_ns = newest_t_ns_;
   if (published_t_ns_ != INT64_MIN && t_frame_ns <= published_t_ns_) {
-    if (t_now_ns - published_t_ns_ < stale_ns) return;
+    if (t_now_ns <= published_t_ns_ || (!state_changed_ && t_now_ns - published_t_ns_ < stale_ns))
+      return;
     t_frame_ns = t_now_ns;
   }
   published_t_ns_ = t_frame_ns;
+  state_changed_ = false;
   // Sensors that went silent degrade their segment (the engine infers it from the parent).
   for (size_t i = 0; i < sensors_.size(); ++i) {
     Health& h = health_[i];

@@ -110,6 +110,13 @@ TEST(PipelineCore, EveryFrameHasItsOwnTime) {
   for (size_t i = 0; i < while_streaming; ++i)
     EXPECT_EQ(sink.frames[i].t_ns % 10'000'000, 0) << i;  // sample times
   EXPECT_EQ(sink.frames.back().sensors[0].state, kStale);
+  // A flag changed without a new sample: the next tick publishes it (at the clock's time).
+  const size_t before_flag = sink.frames.size();
+  core.set_frame_flag(kFrameDemo, true);
+  core.advance_clock_to(2'010'000'000);
+  ASSERT_EQ(sink.frames.size(), before_flag + 1);
+  EXPECT_TRUE(sink.frames.back().flags & kFrameDemo);
+  EXPECT_GT(sink.frames.back().t_ns, sink.frames[before_flag - 1].t_ns);
 }
 
 TEST(PipelineCore, RejectsNanAndUnknownSensors) {

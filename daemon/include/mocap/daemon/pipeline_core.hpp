@@ -103,6 +103,7 @@ class PipelineCore {
   int64_t next_frame_ns_ = INT64_MIN;
   uint32_t extra_flags_ = 0;
   bool calibrating_ = false;
+  bool state_changed_ = false;  ///< a flag or the calibration state changed since the last frame
   CalibrationPose calib_pose_ = CalibrationPose::npose;
   int64_t calib_at_ns_ = 0;
 };
