@@ -17,7 +17,9 @@ using namespace joycon;
 
 class JoyconDecoder final : public ProtocolDecoder {
  public:
-  explicit JoyconDecoder(const DeviceSpec& spec) : common_(spec) {
+  // Full scale as decoded: +-8 g (4096 LSB/g) and 32767 / 14.247 = 2300 deg/s (LSM6DS3 at
+  // +-2000 deg/s read with hid-nintendo's 15 % margin).
+  explicit JoyconDecoder(const DeviceSpec& spec) : common_(spec, {.gyr_dps = 2300, .acc_g = 8}) {
     const auto side = option_string(spec, "side", "left");
     if (side != "left" && side != "right" && side != "pro")
       throw std::invalid_argument("device " + spec.name + ": side must be left, right or pro");

@@ -14,7 +14,8 @@ namespace {
 
 class XbusDecoder final : public ProtocolDecoder {
  public:
-  explicit XbusDecoder(const DeviceSpec& spec) : common_(spec) {
+  // The widest MTi ranges (MTi 1-series: +-2000 deg/s, +-16 g); options narrow them per model.
+  explicit XbusDecoder(const DeviceSpec& spec) : common_(spec, {.gyr_dps = 2000, .acc_g = 16}) {
     const auto wrap = option_string(spec, "time_wrap", "2^32");
     if (wrap == "day")
       time_ = Unwrapper(864'000'000);

@@ -61,6 +61,12 @@ struct DecoderStats {
   uint64_t resyncs = 0;          ///< times the framer skipped garbage to find a frame start
   uint64_t dropped_samples = 0;  ///< samples missing according to the device's counter
   uint64_t clock_resets = 0;     ///< device clock jumps / restarts detected
+  /// Samples with a gyro or accelerometer axis beyond 1.1 x the sensor's full scale: impossible
+  /// readings behind a valid checksum; the field is dropped and the sample flagged
+  /// kFlagImplausible (docs/devices.md "Implausible values").
+  uint64_t implausible = 0;
+  /// Samples with an axis at >= 0.99 x full scale (clipped, or a glitch): kept, kFlagSaturated.
+  uint64_t saturated = 0;
 };
 
 /// Pure byte-stream decoder for one protocol (framing + parse + unit conversion + time mapping).
