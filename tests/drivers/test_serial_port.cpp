@@ -111,7 +111,8 @@ TEST(SerialPort, AnotherOpenerIsNamed) {
 }
 
 // Issue 22: a second reader on the port made zero-byte reads that were taken as "device closed":
-// 11-13 reconnects in 4 s. Now its stolen bytes are just missing data, and it is named.
+// 11-13 reconnects in 4 s. Now its stolen bytes are just missing data (naming another process:
+// AnotherOpenerIsNamed).
 TEST(E2eSerial, SecondReaderIsNoReconnectStorm) {
   SimOptions so{.protocol = "line", .rate_hz = 1000};
   SimulatedDevice sim(so);
@@ -145,9 +146,14 @@ TEST(E2eSerial, SecondReaderIsNoReconnectStorm) {
   const auto ev = sink.events_snapshot();
   ASSERT_FALSE(ev.empty());
   EXPECT_TRUE(ev.front().connected);
+  // Silence may be reported when the other reader wins every race for 500 ms (it is right: no
+  // data reached the driver); a vanish (hang-up, "device closed") must not be.
   int lost = 0;
-  for (const auto& e : ev)
-    if (!e.connected) ++lost, std::printf("lost: %s\n", e.reason.c_str());
+  for (const auto& e : ev) {
+    if (e.connected) continue;
+    std::printf("disconnected: %s\n", e.reason.c_str());
+    if (e.reason.rfind("no data for", 0) != 0) ++lost;
+  }
   EXPECT_EQ(lost, 0);
   EXPECT_EQ(dev->stats().reconnects, 0u);
   std::printf(
