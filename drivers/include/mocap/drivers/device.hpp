@@ -100,6 +100,10 @@ class Device {
 /// Factories (drivers/src/registry.cpp). Throw std::invalid_argument with a clear message for an
 /// unknown protocol or malformed spec.
 std::unique_ptr<StreamDecoder> make_decoder(const DeviceSpec& spec);
+/// For a serial sensor whose rate x bytes per sample x bits per byte (10 for 8N1, 11 for 8N2)
+/// exceeds its baud: a message saying so and what to change; "" otherwise (or when the
+/// protocol's sample size or the rate is not known, or the port is not a serial link).
+std::string serial_link_warning(const DeviceSpec& spec);
 std::unique_ptr<Device> make_device(const DeviceSpec& spec, Logger log);
 
 }  // namespace mocap
