@@ -142,8 +142,9 @@ class SerialTransport final : public ByteTransport {
       empty_reads_ = 0;
       return r;
     }
-    const int e = errno;
-    if (n < 0 && (e == EAGAIN || e == EINTR)) return r.kind = ReadResult::kTimeout, r;
+    // libserialport returns 0 on EAGAIN itself; its failures keep errno in sp_last_error_code.
+    const int e = port_ ? sp_last_error_code() : errno;
+    if (n < 0 && !port_ && (e == EAGAIN || e == EINTR)) return r.kind = ReadResult::kTimeout, r;
     if (n < 0 && e == EIO) {
       r.kind = ReadResult::kVanished;
       r.reason = "hang-up (EIO: device unplugged or its other end closed)";
