@@ -25,8 +25,9 @@ TEST(Plausibility, LineSensorGlitchesAreDroppedFlaggedAndCounted) {
   test::CollectSink sink;
   std::string in;
   in += sample_line(0, 1, 0);
-  in += sample_line(10'000, 1, 5000);  // 5000 deg/s at rest: beyond any reading of a 2000 deg/s gyro
-  in += sample_line(20'000, 40, 0);    // 40 g then rest
+  in +=
+      sample_line(10'000, 1, 5000);  // 5000 deg/s at rest: beyond any reading of a 2000 deg/s gyro
+  in += sample_line(20'000, 40, 0);  // 40 g then rest
   in += sample_line(30'000, 1, 1995);  // pegged at full scale: kept, flagged saturated
   in += sample_line(40'000, 1, 0.5);
   dec->feed(as_bytes(in), 0, sink);
