@@ -378,6 +378,11 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
     if (std::string err = ctx.validators->sensor(s); !err.empty())
       ctx.add(at("driver"), p + ".driver", err);
   }
+  if (ctx.errors.errors.size() == errors_before && ctx.validators &&
+      ctx.validators->sensor_warning) {
+    if (std::string w = ctx.validators->sensor_warning(s); !w.empty())
+      ctx.errors.warnings.push_back(p + " (" + s.name + "): " + w);
+  }
 }
 
 bool valid_ipv4(const std::string& s) {
@@ -730,8 +735,7 @@ toml::array toml_vec3(const Eigen::Vector3d& v) {
 
 /// [body] with every override inlined (no file keys), so a recorded configuration is complete.
 toml::table body_to_toml(const BodyConfig& b) {
-  toml::table t{{"height_m", b.model.height_m},
-                {"root_motion", b.root_motion}};
+  toml::table t{{"height_m", b.model.height_m}, {"root_motion", b.root_motion}};
   toml::table segments;
   for (int i = 0; i < kSegmentCount; ++i) {
     toml::table st;
@@ -781,12 +785,11 @@ std::string config_to_toml(const Config& c) {
     root.insert("filter", std::move(f));
   }
   root.insert("body", body_to_toml(c.body));
-  root.insert("calibration",
-              toml::table{{"pose", c.calibration.pose},
-                          {"countdown_s", c.calibration.countdown_s},
-                          {"capture_s", c.calibration.capture_s},
-                          {"file", c.calibration.file},
-                          {"heading", c.calibration.heading}});
+  root.insert("calibration", toml::table{{"pose", c.calibration.pose},
+                                         {"countdown_s", c.calibration.countdown_s},
+                                         {"capture_s", c.calibration.capture_s},
+                                         {"file", c.calibration.file},
+                                         {"heading", c.calibration.heading}});
   toml::table outs;
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
                                   {"bind", c.outputs.json.bind},

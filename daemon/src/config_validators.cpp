@@ -22,6 +22,15 @@ const ConfigValidators& default_validators() {
       }
       return {};
     };
+    out.sensor_warning = [](const SensorConfig& s) -> std::string {
+      Config one;
+      one.sensors.push_back(s);
+      try {
+        return serial_link_warning(device_spec(one, 0));
+      } catch (const std::exception&) {
+        return {};  // reported as an error by `sensor`
+      }
+    };
     out.filter_param = [](const std::string& name, const std::string& value) -> std::string {
       FilterParams p;
       std::string err;

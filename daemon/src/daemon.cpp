@@ -231,6 +231,9 @@ std::string Daemon::status_json() const {
       const DeviceStats ds = devices_[i]->stats();
       e["clock_resets"] = ds.decoder.clock_resets;  // device clock jumps/restarts detected
       e["reconnects"] = ds.reconnects;
+      // Readings beyond the sensor's range (field dropped) / at full scale (docs/devices.md).
+      e["implausible"] = ds.decoder.implausible;
+      e["saturated"] = ds.decoder.saturated;
     }
     e["at_rest"] = f.at_rest;
     e["mag_disturbed"] = f.mag_disturbed;

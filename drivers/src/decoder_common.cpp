@@ -8,8 +8,35 @@
 
 namespace mocap {
 
-DecoderCommon::DecoderCommon(const DeviceSpec& spec)
-    : sensor_id(spec.first_sensor_id), remap_(AxisRemap::parse(spec.axis_remap)) {}
+DecoderCommon::DecoderCommon(const DeviceSpec& spec, SensorRange range)
+    : sensor_id(spec.first_sensor_id),
+      gyr_max_rad_s_(option_double(spec, "gyr_range_dps", range.gyr_dps) * M_PI / 180),
+      acc_max_m_s2_(option_double(spec, "acc_range_g", range.acc_g) * 9.80665),
+      remap_(AxisRemap::parse(spec.axis_remap)) {
+  if (!(gyr_max_rad_s_ > 0) || !(acc_max_m_s2_ > 0))
+    throw std::invalid_argument("device " + spec.name +
+                                ": gyr_range_dps and acc_range_g must be positive");
+}
+
+void DecoderCommon::check_range(ImuSample& s) {
+  // Beyond 1.1 x full scale no reading of this sensor can be: a glitch behind a valid checksum
+  // (dropped). At >= 0.99 x full scale the axis is clipped, or pegged by a glitch (flagged).
+  bool implausible = false, saturated = false;
+  auto check = [&](const Eigen::Vector3d& v, double full_scale, uint8_t field) {
+    if (!(s.valid & field)) return;
+    const double m = v.cwiseAbs().maxCoeff();
+    if (m > 1.1 * full_scale) {
+      s.valid &= static_cast<uint8_t>(~field);
+      implausible = true;
+    } else if (m >= 0.99 * full_scale) {
+      saturated = true;
+    }
+  };
+  check(s.gyr_rad_s, gyr_max_rad_s_, kFieldGyr);
+  check(s.acc_m_s2, acc_max_m_s2_, kFieldAcc);
+  if (implausible) s.flags |= kFlagImplausible, ++stats.implausible;
+  if (saturated) s.flags |= kFlagSaturated, ++stats.saturated;
+}
 
 void DecoderCommon::emit(ImuSample& s, int64_t t_device_ns, int64_t t_read_ns, int64_t dropped,
                          SampleSink& sink) {
@@ -39,6 +66,7 @@ void DecoderCommon::finish(ImuSample& s, SampleSink& sink) {
   if (!s.gyr_rad_s.allFinite()) s.valid &= ~kFieldGyr;
   if (!s.acc_m_s2.allFinite()) s.valid &= ~kFieldAcc;
   if (!s.mag_uT.allFinite()) s.valid &= ~kFieldMag;
+  check_range(s);
   if (s.has(kFieldQuat)) {
     const double n = s.q_device_sensor.norm();
     if (!std::isfinite(n) || n < 0.5 || n > 1.5) {

@@ -17,9 +17,16 @@ class ProtocolDecoder : public StreamDecoder {
   virtual uint64_t replies(uint32_t /*id*/) const { return 0; }
 };
 
+/// A sensor's full scale per axis (the largest reading it can make), for the plausibility check.
+/// spec.options gyr_range_dps / acc_range_g override the protocol's.
+struct SensorRange {
+  double gyr_dps = 2000;
+  double acc_g = 16;
+};
+
 class DecoderCommon {
  public:
-  explicit DecoderCommon(const DeviceSpec& spec);
+  explicit DecoderCommon(const DeviceSpec& spec, SensorRange range = {});
 
   /// Maps device time to host time, remaps axes, drops non-finite fields, stamps id and emits.
   /// s holds device-frame SI values; dropped = samples lost just before this one.
@@ -33,6 +40,8 @@ class DecoderCommon {
 
  private:
   void finish(ImuSample& s, SampleSink& sink);
+  void check_range(ImuSample& s);
+  double gyr_max_rad_s_, acc_max_m_s2_;
   AxisRemap remap_;
   DeviceClock clock_;
   uint32_t seq_ = 0;

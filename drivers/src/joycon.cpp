@@ -1,6 +1,8 @@
 // Joy-Con / Pro Controller report parsers, host commands and calibration (see joycon.hpp).
 #include "mocap/drivers/joycon.hpp"
 
+#include <algorithm>
+
 namespace mocap::joycon {
 
 namespace {
@@ -37,6 +39,15 @@ Calibration parse_calibration(std::span<const uint8_t, kImuCalibSize> b) {
     c.gyr_sens[k] = le16(&b[18 + 2 * k]);
   }
   return c;
+}
+
+bool parse_spi_reply(const Reply& r, SpiData& out) {
+  if (r.subcmd != kSubSpiRead || r.data.size() < 5) return false;
+  out.address =
+      r.data[0] | r.data[1] << 8 | r.data[2] << 16 | static_cast<uint32_t>(r.data[3]) << 24;
+  const std::size_t len = std::min<std::size_t>(r.data[4], r.data.size() - 5);
+  out.bytes = r.data.subspan(5, len);
+  return true;
 }
 
 void encode_calibration(const Calibration& c, std::span<uint8_t, kImuCalibSize> out) {

@@ -17,7 +17,9 @@ using namespace joycon;
 
 class JoyconDecoder final : public ProtocolDecoder {
  public:
-  explicit JoyconDecoder(const DeviceSpec& spec) : common_(spec) {
+  // Full scale as decoded: +-8 g (4096 LSB/g) and 32767 / 14.247 = 2300 deg/s (LSM6DS3 at
+  // +-2000 deg/s read with hid-nintendo's 15 % margin).
+  explicit JoyconDecoder(const DeviceSpec& spec) : common_(spec, {.gyr_dps = 2300, .acc_g = 8}) {
     const auto side = option_string(spec, "side", "left");
     if (side != "left" && side != "right" && side != "pro")
       throw std::invalid_argument("device " + spec.name + ": side must be left, right or pro");
@@ -36,12 +38,8 @@ class JoyconDecoder final : public ProtocolDecoder {
     if (parse_reply(r, rep)) {
       ++replies_[rep.subcmd];
       ++common_.stats.frames;
-      if (rep.subcmd == kSubSpiRead && rep.data.size() >= 5 + kImuCalibSize) {
-        const uint32_t addr = rep.data[0] | rep.data[1] << 8 | rep.data[2] << 16 |
-                              static_cast<uint32_t>(rep.data[3]) << 24;
-        if (addr == kSpiImuFactoryCalib && rep.data[4] >= kImuCalibSize)
-          cal_ = parse_calibration(rep.data.subspan(5).first<kImuCalibSize>()), calibrated_ = true;
-      }
+      SpiData spi;
+      if (parse_spi_reply(rep, spi)) take_calibration(spi);
       return;
     }
     if (!parse_full(r, full_)) {
@@ -73,6 +71,21 @@ class JoyconDecoder final : public ProtocolDecoder {
   uint64_t replies(uint32_t id) const override { return id < replies_.size() ? replies_[id] : 0; }
 
  private:
+  // The user calibration (magic at 0x8026) wins over the factory one (0x6020) whatever the order
+  // of the replies, as in Linux hid-nintendo and SDL.
+  void take_calibration(const SpiData& spi) {
+    if (spi.address == kSpiImuUserCalib && spi.bytes.size() >= kImuUserReadSize) {
+      if (spi.bytes[0] == kUserCalibMagic0 && spi.bytes[1] == kUserCalibMagic1) {
+        cal_ = parse_calibration(spi.bytes.subspan(2).first<kImuCalibSize>());
+        user_cal_ = calibrated_ = true;
+      }
+    } else if (spi.address == kSpiImuFactoryCalib && spi.bytes.size() >= kImuCalibSize &&
+               !user_cal_) {
+      cal_ = parse_calibration(spi.bytes.first<kImuCalibSize>());
+      calibrated_ = true;
+    }
+  }
+
   DecoderCommon common_;
   joycon::Calibration cal_;
   FullReport full_;
@@ -83,7 +96,7 @@ class JoyconDecoder final : public ProtocolDecoder {
   double yz_sign_ = 1;
   std::array<uint64_t, 0x200> replies_{};
   static constexpr int kMaxUncalibrated = 200;
-  bool calibrated_ = false;
+  bool calibrated_ = false, user_cal_ = false;
   int uncalibrated_reports_ = 0;
 };
 
@@ -110,6 +123,7 @@ std::vector<SetupStep> joycon_setup(const DeviceSpec& spec) {
     step({kUsbCmd, 0x04}, -1, "USB force (no timeout)");
   }
   uint8_t n = 0;
+  step(spi_read(n++, kSpiImuUserCalib, kImuUserReadSize), kSubSpiRead, "read IMU user calibration");
   step(spi_read(n++, kSpiImuFactoryCalib, kImuCalibSize), kSubSpiRead,
        "read IMU factory calibration");
   const uint8_t full = 0x30, on = 0x01;

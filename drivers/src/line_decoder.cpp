@@ -48,13 +48,17 @@ class LineDecoder final : public ProtocolDecoder {
       ++bad_headers_;
       return;
     }
-    const int64_t ticks = unwrap_.next(static_cast<uint64_t>(rec_.t));
-    const double t_ns = static_cast<double>(ticks) * units_.t_to_ns;
-    if (!(std::fabs(t_ns) < 4e18)) {  // beyond any real clock (and int64): not a sample
-      ++bad_headers_;
+    // The whole part is the counter (it wraps at 2^wrap_bits, e.g. micros()); the fraction is
+    // kept in every unit (t=s 12.51 is 12 510 000 000 ns, t=ms 1002.5 is 1 002 500 000 ns).
+    const double whole = std::floor(rec_.t);
+    const double frac = rec_.t - whole;
+    const int64_t ticks = unwrap_.next(static_cast<uint64_t>(whole));
+    const auto per_tick = static_cast<int64_t>(units_.t_to_ns);  // 1, 1e3, 1e6 or 1e9: exact
+    if (!(std::fabs(static_cast<double>(ticks) * units_.t_to_ns) < 4e18)) {
+      ++bad_headers_;  // beyond any real clock (and int64): not a sample
       return;
     }
-    const int64_t t_device_ns = static_cast<int64_t>(t_ns);
+    const int64_t t_device_ns = ticks * per_tick + std::llround(frac * units_.t_to_ns);
     const int64_t dropped = period_.update(t_device_ns - last_device_ns_);
     last_device_ns_ = t_device_ns;
     ImuSample s;

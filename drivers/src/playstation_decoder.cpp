@@ -16,8 +16,9 @@ using namespace playstation;
 
 class PlaystationDecoder final : public ProtocolDecoder {
  public:
+  // Full scale: the hid-playstation ranges (2048 deg/s, 4 g over 32767).
   explicit PlaystationDecoder(const DeviceSpec& spec)
-      : common_(spec),
+      : common_(spec, {.gyr_dps = 2048, .acc_g = 4}),
         model_(spec.protocol == "dualsense" ? Model::kDualSense : Model::kDs4),
         scale_(default_scale()),
         ts_(timestamp_modulus(model_)) {}

@@ -1,4 +1,5 @@
 // make_decoder() / make_device(): the protocol table and the choice of transport from the port.
+#include <cstdio>
 #include <stdexcept>
 
 #include "mocap/drivers/device.hpp"
@@ -42,6 +43,39 @@ static const ProtocolInfo& require_protocol(const DeviceSpec& spec) {
 
 std::unique_ptr<StreamDecoder> make_decoder(const DeviceSpec& spec) {
   return require_protocol(spec).make_decoder(spec);
+}
+
+std::string serial_link_warning(const DeviceSpec& spec) {
+  const ProtocolInfo* info = find_protocol(spec.protocol);
+  if (!info || info->transport != ProtocolInfo::kSerial) return {};
+  const std::string& port = spec.port;
+  if (port.rfind("udp:", 0) == 0 || port.rfind("hid:", 0) == 0) return {};
+  double bytes = 0, rate = spec.rate_hz;
+  if (spec.protocol == "witmotion") {
+    bytes = 6 * 11;  // time, acc, gyro, angle, mag, quaternion packets of 11 bytes (as set up)
+  } else if (spec.protocol == "xbus") {
+    if (port.rfind("usb:", 0) == 0) return {};  // may be raw USB (no baud)
+    // MTData2: FA FF 36 LEN + CS, and id+size+data for the counter (2), SampleTimeFine (4),
+    // quaternion (16), acceleration, rate of turn and magnetic field (12 each).
+    bytes = 5 + (3 + 2) + (3 + 4) + (3 + 16) + 3 * (3 + 12);
+    if (rate <= 0) rate = 100;  // what the driver asks for
+  } else {
+    return {};  // line protocol: lines of any length at the device's own rate
+  }
+  if (rate <= 0) return {};
+  const int baud = spec.baud > 0 ? spec.baud : info->default_baud;
+  const double stop_bits = option_double(spec, "stop_bits", info->stop_bits);
+  const double bits_per_byte = 1 + 8 + stop_bits;
+  const double need = rate * bytes * bits_per_byte;
+  if (need <= baud) return {};
+  char msg[400];
+  std::snprintf(msg, sizeof msg,
+                "%s at %g Hz needs %.0f bit/s (%g bytes a sample x %g bits a byte) but %d baud "
+                "carries %d: at most %d samples/s arrive; raise baud (and the device's own, "
+                "docs/devices.md) or lower rate_hz",
+                spec.protocol.c_str(), rate, need, bytes, bits_per_byte, baud, baud,
+                static_cast<int>(baud / (bytes * bits_per_byte)));
+  return msg;
 }
 
 std::unique_ptr<Device> make_device(const DeviceSpec& spec, Logger log) {

@@ -1,12 +1,18 @@
 // Serial transport: libserialport for real ports (found by path or USB VID/PID/serial), POSIX
 // termios for paths libserialport refuses (pseudo-terminals, e.g. simulators and socat bridges).
+#include <dirent.h>
 #include <fcntl.h>
 #include <libserialport.h>
+#include <sys/file.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <climits>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 
 #include "fd_wait.hpp"
 #include "mocap/drivers/transport.hpp"
@@ -50,11 +56,73 @@ speed_t termios_speed(int baud) {
   }
 }
 
+/// What to tell the user when opening a port fails with EBUSY.
+std::string busy_message(const std::string& port) {
+  return port +
+         ": busy: another process holds this port exclusively (another mocapd, a serial "
+         "terminal, ModemManager, ...; `fuser -v " +
+         port + "` names it)";
+}
+
+/// Other processes that have the same character device open (by /proc/PID/fd links), as
+/// "PID (name)"; at most 4. Processes of other users are not visible without privileges.
+std::string other_openers(const std::string& port) {
+  char real[PATH_MAX];
+  if (!::realpath(port.c_str(), real)) return {};
+  const std::string target = real;
+  const std::string self = std::to_string(::getpid());
+  std::string found;
+  int count = 0;
+  DIR* proc = ::opendir("/proc");
+  if (!proc) return {};
+  while (dirent* pe = ::readdir(proc)) {
+    if (pe->d_name[0] < '1' || pe->d_name[0] > '9' || self == pe->d_name) continue;
+    const std::string fd_dir = std::string("/proc/") + pe->d_name + "/fd";
+    DIR* fds = ::opendir(fd_dir.c_str());
+    if (!fds) continue;
+    bool holds = false;
+    while (dirent* fe = ::readdir(fds)) {
+      if (fe->d_name[0] == '.') continue;
+      char link[PATH_MAX];
+      const ssize_t n = ::readlink((fd_dir + "/" + fe->d_name).c_str(), link, sizeof link - 1);
+      if (n > 0 && target == std::string_view(link, static_cast<std::size_t>(n))) {
+        holds = true;
+        break;
+      }
+    }
+    ::closedir(fds);
+    if (!holds) continue;
+    std::string comm;
+    std::ifstream(std::string("/proc/") + pe->d_name + "/comm") >> comm;
+    if (++count <= 4)
+      found += (found.empty() ? "" : ", ") + std::string(pe->d_name) + " (" + comm + ")";
+  }
+  ::closedir(proc);
+  return found;
+}
+
+/// Takes the port for this process: TIOCEXCL (further open()s by non-root processes fail with
+/// EBUSY) and an exclusive flock (as pyserial's exclusive mode and lockdev-style tools do).
+/// False + err when another process already holds the lock.
+bool take_exclusive(int fd, const std::string& port, std::string& err) {
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK)
+    return err = busy_message(port), false;
+  ::ioctl(fd, TIOCEXCL);  // best effort (not every tty supports it)
+  return true;
+}
+
 class SerialTransport final : public ByteTransport {
  public:
-  SerialTransport(std::string name, sp_port* port, int fd)
-      : name_(std::move(name)), port_(port), fd_(fd) {}
+  /// others: processes that had the port open before it was configured (other_openers()).
+  SerialTransport(std::string name, sp_port* port, int fd, const std::string& others)
+      : name_(std::move(name)), port_(port), fd_(fd) {
+    if (!others.empty())
+      warning_ = name_ + " is also open in process " + others +
+                 ": a second reader takes bytes from this one (close it)";
+  }
   ~SerialTransport() override {
+    // A pty's tty outlives this close while its master is open: leave it non-exclusive.
+    if (fd_ >= 0) ::ioctl(fd_, TIOCNXCL);
     if (port_) {
       sp_close(port_);
       sp_free_port(port_);
@@ -71,13 +139,37 @@ class SerialTransport final : public ByteTransport {
                           : ::read(fd_, buf.data(), buf.size());
     if (n > 0) {
       r.n = static_cast<std::size_t>(n);
-    } else if (n < 0 && !port_ && (errno == EAGAIN || errno == EINTR)) {
-      r.kind = ReadResult::kTimeout;
-    } else {
-      r.kind = ReadResult::kVanished;
-      r.reason = n == 0 ? "end of file (device closed)"
-                        : std::string("read: ") + (port_ ? sp_error() : std::strerror(errno));
+      empty_reads_ = 0;
+      return r;
     }
+    // libserialport returns 0 on EAGAIN itself; its failures keep errno in sp_last_error_code.
+    const int e = port_ ? sp_last_error_code() : errno;
+    if (n < 0 && !port_ && (e == EAGAIN || e == EINTR)) return r.kind = ReadResult::kTimeout, r;
+    if (n < 0 && e == EIO) {
+      r.kind = ReadResult::kVanished;
+      r.reason = "hang-up (EIO: device unplugged or its other end closed)";
+      return r;
+    }
+    if (n < 0) {
+      r.kind = ReadResult::kVanished;
+      r.reason = std::string("read: ") + (port_ ? sp_error() : std::strerror(e));
+      return r;
+    }
+    // 0 bytes after poll said readable: a hang-up only if the port says so (POLLHUP/POLLERR);
+    // otherwise another reader took the bytes first, or the wake-up was spurious: no data.
+    pollfd p{fd_, POLLIN, 0};
+    if (::poll(&p, 1, 0) >= 0 && (p.revents & (POLLHUP | POLLERR | POLLNVAL))) {
+      r.kind = ReadResult::kVanished;
+      r.reason = (p.revents & POLLHUP) ? "hang-up (device unplugged or closed)" : "device error";
+      return r;
+    }
+    if (++empty_reads_ >= kMaxEmptyReads) {  // readable forever without data: not a live port
+      empty_reads_ = 0;
+      r.kind = ReadResult::kVanished;
+      r.reason = "port keeps signalling data but none arrives";
+      return r;
+    }
+    r.kind = ReadResult::kTimeout;
     return r;
   }
 
@@ -121,17 +213,21 @@ class SerialTransport final : public ByteTransport {
   std::string describe() const override {
     return name_ + (port_ ? " (libserialport)" : " (termios)");
   }
+  std::string warning() const override { return warning_; }
 
  private:
+  static constexpr int kMaxEmptyReads = 10000;
   std::string name_;
   sp_port* port_;
   int fd_;
+  int empty_reads_ = 0;
+  std::string warning_;
 };
 
 std::unique_ptr<ByteTransport> open_termios(const SerialOptions& opt, std::string& err) {
   const int fd = ::open(opt.port.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) {
-    err = opt.port + ": " + std::strerror(errno);
+    err = errno == EBUSY ? busy_message(opt.port) : opt.port + ": " + std::strerror(errno);
     return nullptr;
   }
   termios tio{};
@@ -140,6 +236,12 @@ std::unique_ptr<ByteTransport> open_termios(const SerialOptions& opt, std::strin
     ::close(fd);
     return nullptr;
   }
+  if (!take_exclusive(fd, opt.port, err)) {
+    ::close(fd);
+    return nullptr;
+  }
+  // Before configuring: a blocking reader elsewhere may give up once VMIN becomes 0.
+  const std::string others = other_openers(opt.port);
   cfmakeraw(&tio);
   tio.c_cflag |= CLOCAL | CREAD;
   tio.c_cflag &= ~CRTSCTS;
@@ -159,7 +261,7 @@ std::unique_ptr<ByteTransport> open_termios(const SerialOptions& opt, std::strin
     ::close(fd);
     return nullptr;
   }
-  return std::make_unique<SerialTransport>(opt.port, nullptr, fd);
+  return std::make_unique<SerialTransport>(opt.port, nullptr, fd, others);
 }
 
 /// Finds the port name of a USB-serial adapter by ids; empty + err if none matches.
@@ -203,8 +305,10 @@ std::unique_ptr<ByteTransport> open_serial(const SerialOptions& opt_in, std::str
     }
     return open_termios(opt, err);
   }
+  const std::string others = other_openers(opt.port);
   if (sp_open(port, SP_MODE_READ_WRITE) != SP_OK) {
-    err = opt.port + ": cannot open: " + sp_error();
+    err = sp_last_error_code() == EBUSY ? busy_message(opt.port)
+                                        : opt.port + ": cannot open: " + sp_error();
     sp_free_port(port);
     return nullptr;
   }
@@ -219,7 +323,12 @@ std::unique_ptr<ByteTransport> open_serial(const SerialOptions& opt_in, std::str
   }
   int fd = -1;
   sp_get_port_handle(port, &fd);
-  return std::make_unique<SerialTransport>(opt.port, port, fd);
+  if (fd >= 0 && !take_exclusive(fd, opt.port, err)) {
+    sp_close(port);
+    sp_free_port(port);
+    return nullptr;
+  }
+  return std::make_unique<SerialTransport>(opt.port, port, fd, others);
 }
 
 }  // namespace mocap

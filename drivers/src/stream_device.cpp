@@ -59,15 +59,19 @@ bool StreamDevice::try_open(SampleSink& sink) {
   }
   last_open_error_.clear();
   log_.info("%s: opened %s", spec_.name.c_str(), transport_->describe().c_str());
+  const std::string warning = transport_->warning();
+  if (!warning.empty()) log_.warn("%s: %s", spec_.name.c_str(), warning.c_str());
   {
     std::lock_guard lk(mu_);
     if (ever_opened_) ++stats_.reconnects;
     stats_.connected = true;
+    if (!warning.empty()) stats_.last_error = warning;
   }
   ever_opened_ = true;
   silent_ = false;
   last_data_ns_ = monotonic_ns();
-  sink.on_connection(spec_.device_index, true, "opened " + transport_->describe());
+  sink.on_connection(spec_.device_index, true,
+                     "opened " + transport_->describe() + (warning.empty() ? "" : "; " + warning));
   step_ = 0;
   attempts_ = 0;
   if (!setup_.empty()) begin_step(sink);

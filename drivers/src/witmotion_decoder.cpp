@@ -13,7 +13,9 @@ namespace {
 
 class WitmotionDecoder final : public ProtocolDecoder {
  public:
-  explicit WitmotionDecoder(const DeviceSpec& spec) : common_(spec) {
+  // Full scale by the wire formula: raw/32768 x 2000 deg/s and x 16 g.
+  explicit WitmotionDecoder(const DeviceSpec& spec)
+      : common_(spec, {.gyr_dps = 2000, .acc_g = 16}) {
     const auto order = option_string(spec, "quat_order", "wxyz");
     if (order != "wxyz" && order != "xyzw")
       throw std::invalid_argument("device " + spec.name + ": quat_order must be wxyz or xyzw");

@@ -1,5 +1,6 @@
 // Decoder for Xsens MTi MTData2: packet counter -> drops, SampleTimeFine (10 kHz, wrapping at
 // 2^32 or once a day) -> device time, m/s^2 / rad/s / normalised field / quaternion (w first).
+#include <cmath>
 #include <map>
 #include <stdexcept>
 
@@ -13,7 +14,8 @@ namespace {
 
 class XbusDecoder final : public ProtocolDecoder {
  public:
-  explicit XbusDecoder(const DeviceSpec& spec) : common_(spec) {
+  // The widest MTi ranges (MTi 1-series: +-2000 deg/s, +-16 g); options narrow them per model.
+  explicit XbusDecoder(const DeviceSpec& spec) : common_(spec, {.gyr_dps = 2000, .acc_g = 16}) {
     const auto wrap = option_string(spec, "time_wrap", "2^32");
     if (wrap == "day")
       time_ = Unwrapper(864'000'000);
@@ -54,8 +56,23 @@ class XbusDecoder final : public ProtocolDecoder {
       s.valid |= kFieldMag;
     }
     if (d_.has_quat) {
-      s.q_device_sensor = Eigen::Quaterniond(d_.quat[0], d_.quat[1], d_.quat[2], d_.quat[3]);
-      s.valid |= kFieldQuat;
+      const Eigen::Quaterniond q(d_.quat[0], d_.quat[1], d_.quat[2], d_.quat[3]);
+      // The data id's coordinate bits (0x000C) name the earth frame the quaternion maps the
+      // sensor into: turned into ENU here, the frame every sample carries.
+      switch (d_.quat_coord) {
+        case 0x0:  // ENU (0x2010)
+          s.q_device_sensor = q, s.valid |= kFieldQuat;
+          break;
+        case 0x4:  // NED (0x2014): E = y_ned, N = x_ned, U = -z_ned
+          s.q_device_sensor = enu_from_ned() * q, s.valid |= kFieldQuat;
+          break;
+        case 0x8:  // NWU (0x2018): E = -y_nwu, N = x_nwu, U = z_nwu
+          s.q_device_sensor = enu_from_nwu() * q, s.valid |= kFieldQuat;
+          break;
+        default:  // reserved coordinate bits: the quaternion is dropped, counted as malformed
+          ++malformed_;
+          break;
+      }
     }
     int64_t dropped = 0;
     if (d_.has_counter) {
@@ -72,6 +89,15 @@ class XbusDecoder final : public ProtocolDecoder {
     } else {
       common_.emit_untimed(s, t_read_ns, sink);
     }
+  }
+
+  static Eigen::Quaterniond enu_from_ned() {
+    const double h = std::sqrt(0.5);  // 180 deg about (1, 1, 0) / sqrt(2)
+    return Eigen::Quaterniond(0, h, h, 0);
+  }
+  static Eigen::Quaterniond enu_from_nwu() {
+    const double h = std::sqrt(0.5);  // +90 deg about z
+    return Eigen::Quaterniond(h, 0, 0, h);
   }
 
   DecoderCommon common_;

@@ -54,10 +54,9 @@ TEST(Config, EmptyFileGivesDefaults) {
 // The body corrections removed after the real-motion measurements (docs/accuracy.md): older
 // configs and recordings still load; each such key is named in a warning, never silently taken.
 TEST(Config, RemovedBodyCorrectionKeysLoadWithAWarning) {
-  for (const char* text : {"[calibration]\nheading_coupling = false\n",
-                           "[calibration]\nrefine_hinges = true\n",
-                           "[calibration]\nrelative_mag_heading = false\n",
-                           "[body]\nenforce_limits = true\n"}) {
+  for (const char* text :
+       {"[calibration]\nheading_coupling = false\n", "[calibration]\nrefine_hinges = true\n",
+        "[calibration]\nrelative_mag_heading = false\n", "[body]\nenforce_limits = true\n"}) {
     ConfigErrors errs;
     EXPECT_TRUE(parse(text, errs)) << text << errs.to_string();
     const std::string t = text;
@@ -259,6 +258,49 @@ TEST(Config, ExampleRigsAreValid) {
     ++n;
   }
   EXPECT_GE(n, 1);
+}
+
+// Issue 22 item 7: a serial sensor asking more than its baud carries is warned about.
+TEST(Config, SerialRateBeyondTheBaudIsWarned) {
+  const std::string base =
+      "[[sensor]]\nname = \"w\"\ndriver = \"witmotion\"\n"
+      "port = \"/dev/ttyUSB0\"\nrate_hz = 100\n";
+  ConfigErrors errs;
+  auto c = parse_config(base, "w.toml", {}, errs, &default_validators());
+  ASSERT_TRUE(c) << errs.to_string();
+  ASSERT_EQ(errs.warnings.size(), 1u);
+  EXPECT_NE(errs.warnings[0].find("9600 baud"), std::string::npos) << errs.warnings[0];
+  EXPECT_NE(errs.warnings[0].find("at most 14 samples/s"), std::string::npos) << errs.warnings[0];
+  EXPECT_NE(errs.warnings[0].find("sensor"), std::string::npos) << errs.warnings[0];
+  // At 115200 it fits; a UDP or HID sensor has no baud; Xbus at 200 Hz on 115200 8N2 does not.
+  for (const char* ok : {"baud = 115200\n", "rate_hz = 10\n"}) {
+    ConfigErrors e2;
+    std::string text = base;
+    if (std::string(ok).rfind("rate_hz", 0) == 0)
+      text.replace(text.find("rate_hz = 100"), 13, "rate_hz = 10");
+    else
+      text += ok;
+    ASSERT_TRUE(parse_config(text, "w.toml", {}, e2, &default_validators())) << e2.to_string();
+    EXPECT_TRUE(e2.warnings.empty()) << ok << e2.warnings.at(0);
+  }
+  ConfigErrors ex;
+  ASSERT_TRUE(
+      parse_config("[[sensor]]\nname = \"x\"\ndriver = \"xbus\"\nport = "
+                   "\"/dev/ttyUSB0\"\nrate_hz = 200\n",
+                   "x.toml", {}, ex, &default_validators()));
+  ASSERT_EQ(ex.warnings.size(), 1u);
+  EXPECT_NE(ex.warnings[0].find("115200 baud"), std::string::npos) << ex.warnings[0];
+}
+
+TEST(Config, ExampleRigsFitTheirLinks) {
+  namespace fs = std::filesystem;
+  for (const auto& e : fs::directory_iterator(fs::path(MOCAP_SOURCE_DIR) / "config")) {
+    if (e.path().extension() != ".toml") continue;
+    ConfigErrors errs;
+    EXPECT_TRUE(load_config(e.path().string(), {}, errs, &default_validators()))
+        << errs.to_string();
+    EXPECT_TRUE(errs.warnings.empty()) << e.path() << ": " << errs.warnings.at(0);
+  }
 }
 
 TEST(Config, MissingFile) {

@@ -77,6 +77,12 @@ TEST(E2eHid, JoyconHandshakeCalibrationAndThreeSamplesPerReport) {
   run_case({"joycon", 200, 0.0013, 0.0025}, {{"wait_for_host", "1"}});
 }
 
+TEST(E2eHid, JoyconUserCalibrationWinsOverFactory) {
+  // The controller's IMU reads through a user calibration (magic B2 A1 at SPI 0x8026) that
+  // differs from its factory one: decoding with the factory one would miss the tolerance.
+  run_case({"joycon", 200, 0.0013, 0.0025}, {{"wait_for_host", "1"}, {"user_cal", "1"}});
+}
+
 TEST(E2eHid, RightJoyconAxesMatchTheLeft) {
   run_case({"joycon", 200, 0.0013, 0.0025}, {{"side", "right"}}, {{"side", "right"}});
 }
@@ -136,6 +142,66 @@ TEST(JoyconReports, CalibrationFormulasAndZeroDivisor) {
   EXPECT_NEAR(joycon::gyr_dps(c, 1, 14247), 1000.0, 1e-9);
   c.gyr_sens[2] = c.gyr_offset[2] = 7;  // divisor 0 -> 1, no crash
   EXPECT_TRUE(std::isfinite(joycon::gyr_dps(c, 2, 100)));
+}
+
+namespace {
+// A 0x21 reply to an SPI read of `len` bytes at `addr`, carrying `bytes`.
+std::vector<uint8_t> spi_reply(uint32_t addr, uint8_t len, std::span<const uint8_t> bytes) {
+  std::vector<uint8_t> r(joycon::kReportSize, 0);
+  r[0] = joycon::kInputReply, r[13] = 0x90, r[14] = joycon::kSubSpiRead;
+  for (int k = 0; k < 4; ++k)
+    r[15 + k] = static_cast<uint8_t>(addr >> (8 * k));
+  r[19] = len;
+  std::copy(bytes.begin(), bytes.end(), r.begin() + 20);
+  return r;
+}
+// A 0x30 report whose three samples all read `acc` and `gyr` (raw).
+std::vector<uint8_t> full_report(uint8_t timer, int16_t acc, int16_t gyr) {
+  std::vector<uint8_t> r(joycon::kReportSize, 0);
+  r[0] = joycon::kInputFull, r[1] = timer;
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) {
+      r[13 + 12 * i + 2 * k] = static_cast<uint8_t>(acc), r[14 + 12 * i + 2 * k] = acc >> 8;
+      r[19 + 12 * i + 2 * k] = static_cast<uint8_t>(gyr), r[20 + 12 * i + 2 * k] = gyr >> 8;
+    }
+  return r;
+}
+// Decodes one report after the given SPI replies; returns the first sample's gyro x in dps.
+double gyro_x_dps_after(const std::vector<std::vector<uint8_t>>& replies) {
+  auto dec = make_decoder({.name = "j", .protocol = "joycon"});
+  test::CollectSink sink;
+  for (const auto& r : replies)
+    dec->feed(r, 0, sink);
+  dec->feed(full_report(1, 4096, 1000), 0, sink);
+  EXPECT_EQ(sink.samples.size(), 3u);
+  return sink.samples.empty() ? 0 : sink.samples[0].gyr_rad_s.x() * 180 / M_PI;
+}
+}  // namespace
+
+TEST(JoyconReports, UserCalibrationWhenMagicPresentElseFactory) {
+  joycon::Calibration factory, user;
+  factory.gyr_offset = {10, 10, 10};
+  user.gyr_offset = {-200, -200, -200};
+  user.gyr_sens = {13000, 13000, 13000};
+  std::array<uint8_t, joycon::kImuCalibSize> fb{}, ub_cal{};
+  joycon::encode_calibration(factory, fb);
+  joycon::encode_calibration(user, ub_cal);
+  std::vector<uint8_t> with_magic(joycon::kImuUserReadSize);
+  with_magic[0] = joycon::kUserCalibMagic0, with_magic[1] = joycon::kUserCalibMagic1;
+  std::copy(ub_cal.begin(), ub_cal.end(), with_magic.begin() + 2);
+  std::vector<uint8_t> erased(joycon::kImuUserReadSize, 0xFF);
+  const auto user_reply = spi_reply(joycon::kSpiImuUserCalib, joycon::kImuUserReadSize, with_magic);
+  const auto erased_reply = spi_reply(joycon::kSpiImuUserCalib, joycon::kImuUserReadSize, erased);
+  const auto factory_reply = spi_reply(joycon::kSpiImuFactoryCalib, joycon::kImuCalibSize, fb);
+  const double want_user = joycon::gyr_dps(user, 0, 1000);
+  const double want_factory = joycon::gyr_dps(factory, 0, 1000);
+  ASSERT_GT(std::fabs(want_user - want_factory), 1.0);
+  // User calibration present: used, whichever reply comes first.
+  EXPECT_NEAR(gyro_x_dps_after({user_reply, factory_reply}), want_user, 1e-9);
+  EXPECT_NEAR(gyro_x_dps_after({factory_reply, user_reply}), want_user, 1e-9);
+  // No magic (erased flash): the factory calibration.
+  EXPECT_NEAR(gyro_x_dps_after({erased_reply, factory_reply}), want_factory, 1e-9);
+  EXPECT_NEAR(gyro_x_dps_after({factory_reply}), want_factory, 1e-9);
 }
 
 TEST(E2eHid, ControllersOverUdpDatagrams) {

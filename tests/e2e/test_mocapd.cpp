@@ -246,6 +246,22 @@ TEST(Mocapd, RefusesBadConfigWithPosition) {
   fs::remove(f);
 }
 
+// Issue 22 item 7: a WitMotion rig asking 100 Hz at 9600 baud passes the check with a warning
+// naming the sensor, the link and the samples/s it carries.
+TEST(Mocapd, CheckConfigWarnsWhenTheRateExceedsTheBaud) {
+  const fs::path f =
+      fs::temp_directory_path() / ("mocap-e2e-baud-" + std::to_string(getpid()) + ".toml");
+  std::ofstream(f) << "[[sensor]]\nname = \"hips\"\ndriver = \"witmotion\"\n"
+                      "port = \"/dev/ttyUSB0\"\nrate_hz = 100\nsegment = \"pelvis\"\n";
+  std::string out;
+  EXPECT_EQ(run({kBin + "mocapd", "--check-config", f.string()}, &out), 0);
+  const std::string err =
+      slurp(fs::temp_directory_path() / ("mocap-e2e-out-" + std::to_string(getpid()) + ".err"));
+  EXPECT_NE(err.find("warning: sensor[0] (hips): witmotion at 100 Hz"), std::string::npos) << err;
+  EXPECT_NE(err.find("9600 baud carries 9600: at most 14 samples/s"), std::string::npos) << err;
+  fs::remove(f);
+}
+
 // Golden: recorded sessions under tests/data/ replay to their stored expected poses (numeric
 // tolerance: 1e-4 on quaternion components, 1e-3 m on positions). After an intended change,
 // regenerate with scripts/regen-golden.

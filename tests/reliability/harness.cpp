@@ -141,6 +141,13 @@ void LineFeeder::run() {
           s->t_us += 10000;
           continue;
         }
+        if (m == FaultMode::glitch && ++s->ticks % 10 == 0) {
+          s->pty->write_bytes(
+              line::format_line(s->t_us & s->wrap_mask, {0, 0, 1, 5000, 0, 0, 20, 0, -40}, true));
+          s->t_us += 10000;
+          ++s->written;
+          continue;
+        }
         // Every other tick a line cut off mid-number: it runs into the next line (both lost).
         if (m == FaultMode::truncated && (++s->ticks & 1))
           s->pty->write_bytes("123456 0.01 0.02 0.9");

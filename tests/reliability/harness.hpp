@@ -59,7 +59,8 @@ class LineSensorPty {
 };
 
 /// Byte-level faults a LineFeeder can inject into one sensor's stream.
-enum class FaultMode { normal, garbage, truncated, wrong_baud, flood, silent };
+/// glitch: every 10th sample a valid line reading 5000 deg/s (beyond any 2000 deg/s gyro).
+enum class FaultMode { normal, garbage, truncated, wrong_baud, flood, silent, glitch };
 
 /// Writes every sensor's samples at 100 Hz (device time in microseconds) on its own thread,
 /// with a per-sensor fault mode the test changes while it runs.

@@ -73,7 +73,8 @@ TEST(DeviceFaults, FaultySensorsAreReportedAndTheOthersKeepStreaming) {
   const auto before = d.status();
   const uint64_t good_before = s_good.written.load();
   s_flood.mode = FaultMode::flood;
-  for (FaultMode m : {FaultMode::garbage, FaultMode::truncated, FaultMode::wrong_baud}) {
+  for (FaultMode m :
+       {FaultMode::garbage, FaultMode::truncated, FaultMode::wrong_baud, FaultMode::glitch}) {
     s_noisy.mode = m;
     std::this_thread::sleep_for(700ms);
   }
@@ -108,6 +109,10 @@ TEST(DeviceFaults, FaultySensorsAreReportedAndTheOthersKeepStreaming) {
   EXPECT_GT(sensor_status(after, "noisy").value("clock_resets", 0ull), 0u) << after.dump();
   EXPECT_EQ(sensor_status(after, "good").value("clock_resets", 1ull), 0u) << after.dump();
   EXPECT_EQ(sensor_status(after, "wrap").value("clock_resets", 1ull), 0u) << after.dump();
+  // Readings beyond a sensor's range (the glitches) are counted per sensor.
+  EXPECT_GT(sensor_status(after, "noisy").value("implausible", 0ull), 0u) << after.dump();
+  EXPECT_EQ(sensor_status(after, "good").value("implausible", 1ull), 0u) << after.dump();
+  EXPECT_EQ(sensor_status(after, "good").value("saturated", 1ull), 0u) << after.dump();
   // No sample of the healthy sensor was lost by the pipeline: its ring never overflowed and
   // the decoder saw no errors on it.
   EXPECT_EQ(sensor_status(after, "good").value("errors", 1ull), 0u) << after.dump();

@@ -1,6 +1,6 @@
 // Simulated Joy-Con / Pro Controller (USB): answers the USB handshake (0x80 xx -> 0x81 xx) and
-// subcommands (SPI read of its factory calibration, report mode, IMU enable) with 0x21 replies,
-// then sends 0x30 reports carrying three IMU samples each through that calibration.
+// subcommands (SPI reads of its factory and user calibration, report mode, IMU enable) with 0x21
+// replies, then sends 0x30 reports carrying three IMU samples each through that calibration.
 #include <cmath>
 #include <deque>
 
@@ -20,6 +20,18 @@ class JoyconEncoder final : public ProtocolEncoder {
     cal_.acc_sens = {16384, 16300, 16450};
     cal_.gyr_offset = {12, -8, 5};
     cal_.gyr_sens = {13371, 13300, 13400};
+    // options.user_cal = "1": a user calibration (magic at 0x8026) that differs from the
+    // factory one; the IMU then reads through it (as after the console's recalibration).
+    if (enc_option(opt, "user_cal", "0") == "1") {
+      factory_ = cal_;
+      cal_.acc_origin = {-60, 45, -25};
+      cal_.acc_sens = {16500, 16200, 16380};
+      cal_.gyr_offset = {-30, 22, -14};
+      cal_.gyr_sens = {13500, 13250, 13371};
+      user_ = true;
+    } else {
+      factory_ = cal_;
+    }
     yz_sign_ = enc_option(opt, "side", "left") == "right" ? -1 : 1;
     // Standalone captures (no host) start streaming; a live sim waits for the host's set-up.
     if (enc_option(opt, "wait_for_host", "0") == "0") mode_ = 0x30, imu_ = true;
@@ -75,7 +87,14 @@ class JoyconEncoder final : public ProtocolEncoder {
       r[13] = 0x90;
       std::copy(in.begin() + 11, in.begin() + 16, r.begin() + 15);
       if (addr == kSpiImuFactoryCalib && len >= kImuCalibSize)
-        encode_calibration(cal_, std::span(r).subspan(20).first<kImuCalibSize>());
+        encode_calibration(factory_, std::span(r).subspan(20).first<kImuCalibSize>());
+      if (addr == kSpiImuUserCalib && len >= kImuUserReadSize) {
+        std::fill(r.begin() + 20, r.begin() + 20 + len, uint8_t{0xFF});  // erased flash
+        if (user_) {
+          r[20] = kUserCalibMagic0, r[21] = kUserCalibMagic1;
+          encode_calibration(cal_, std::span(r).subspan(22).first<kImuCalibSize>());
+        }
+      }
     } else if (id == kSubReportMode && in.size() >= 12) {
       mode_ = in[11];
     } else if (id == kSubEnableImu && in.size() >= 12) {
@@ -85,7 +104,11 @@ class JoyconEncoder final : public ProtocolEncoder {
   }
 
   void unsolicited(std::vector<uint8_t>& out) override {
-    handle_host_bytes(spi_read(0, kSpiImuFactoryCalib, kImuCalibSize), out);
+    // One report per call: the calibration the decoder will use.
+    if (user_)
+      handle_host_bytes(spi_read(0, kSpiImuUserCalib, kImuUserReadSize), out);
+    else
+      handle_host_bytes(spi_read(0, kSpiImuFactoryCalib, kImuCalibSize), out);
   }
   bool streaming() const override { return mode_ == 0x30; }
   double rate_hz() const override { return rate_; }
@@ -93,7 +116,9 @@ class JoyconEncoder final : public ProtocolEncoder {
 
  private:
   double rate_;
-  joycon::Calibration cal_;
+  joycon::Calibration cal_;      ///< the one the IMU reads through (user if set, else factory)
+  joycon::Calibration factory_;  ///< at SPI 0x6020
+  bool user_ = false;            ///< a user calibration at 0x8026
   double yz_sign_ = 1;
   uint8_t mode_ = 0x3F;
   bool imu_ = false;

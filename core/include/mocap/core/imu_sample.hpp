@@ -25,6 +25,7 @@ enum SampleFlag : uint8_t {
   kFlagSaturated = 1u << 2,     ///< at least one axis is at its full-scale limit
   kFlagSynthetic = 1u << 3,     ///< produced by a simulator, not hardware
   kFlagInterpolated = 1u << 4,  ///< filled in (e.g. mag held from a slower stream)
+  kFlagImplausible = 1u << 5,   ///< a field beyond the sensor's range was dropped (a glitch)
 };
 
 /// One time instant of one inertial sensor, after unit conversion and axis remapping.

@@ -170,6 +170,9 @@ struct ConfigErrors {
 /// reports a message at the offending key's position.
 struct ConfigValidators {
   std::function<std::string(const SensorConfig&)> sensor;  ///< e.g. unknown driver or option
+  /// A sensor that loads but will not work as asked (e.g. a rate its baud cannot carry): ""
+  /// or a warning, reported in ConfigErrors::warnings.
+  std::function<std::string(const SensorConfig&)> sensor_warning;
   std::function<std::string(const std::string& name, const std::string& value)> filter_param;
   std::vector<std::string> filter_param_names;  ///< for "did you mean" suggestions
 };

@@ -62,6 +62,12 @@ struct DecoderStats {
   uint64_t resyncs = 0;          ///< times the framer skipped garbage to find a frame start
   uint64_t dropped_samples = 0;  ///< samples missing according to the device's counter
   uint64_t clock_resets = 0;     ///< device clock jumps / restarts detected
+  /// Samples with a gyro or accelerometer axis beyond 1.1 x the sensor's full scale: impossible
+  /// readings behind a valid checksum; the field is dropped and the sample flagged
+  /// kFlagImplausible (docs/devices.md "Implausible values").
+  uint64_t implausible = 0;
+  /// Samples with an axis at >= 0.99 x full scale (clipped, or a glitch): kept, kFlagSaturated.
+  uint64_t saturated = 0;
 };
 
 /// Pure byte-stream decoder for one protocol (framing + parse + unit conversion + time mapping).
@@ -95,6 +101,10 @@ class Device {
 /// Factories (drivers/src/registry.cpp). Throw std::invalid_argument with a clear message for an
 /// unknown protocol or malformed spec.
 std::unique_ptr<StreamDecoder> make_decoder(const DeviceSpec& spec);
+/// For a serial sensor whose rate x bytes per sample x bits per byte (10 for 8N1, 11 for 8N2)
+/// exceeds its baud: a message saying so and what to change; "" otherwise (or when the
+/// protocol's sample size or the rate is not known, or the port is not a serial link).
+std::string serial_link_warning(const DeviceSpec& spec);
 std::unique_ptr<Device> make_device(const DeviceSpec& spec, Logger log);
 
 class ByteTransport;

@@ -15,7 +15,13 @@ constexpr uint8_t kInputFull = 0x30, kInputReply = 0x21, kUsbReply = 0x81;
 constexpr uint8_t kOutputSubcmd = 0x01, kUsbCmd = 0x80;
 constexpr uint8_t kSubSpiRead = 0x10, kSubReportMode = 0x03, kSubEnableImu = 0x40;
 constexpr uint32_t kSpiImuFactoryCalib = 0x6020;
+/// User IMU calibration (written by the console's "calibrate motion controls"): magic B2 A1 at
+/// 0x8026, the 24 calibration bytes at 0x8028 when the magic is there (Linux hid-nintendo, SDL
+/// use it before the factory one). One SPI read of kImuUserReadSize at 0x8026 gets both.
+constexpr uint32_t kSpiImuUserCalib = 0x8026;
+constexpr uint8_t kUserCalibMagic0 = 0xB2, kUserCalibMagic1 = 0xA1;
 constexpr std::size_t kImuCalibSize = 24, kReportSize = 64;
+constexpr std::size_t kImuUserReadSize = 2 + kImuCalibSize;
 constexpr int64_t kImuSpacingNs = 5'000'000;  ///< the three samples of a report are ~5 ms apart
 
 struct ImuRaw {
@@ -40,6 +46,12 @@ struct Calibration {
   std::array<int16_t, 3> gyr_offset{0, 0, 0}, gyr_sens{13371, 13371, 13371};
 };
 Calibration parse_calibration(std::span<const uint8_t, kImuCalibSize> bytes);
+/// An SPI read reply's data (address LE32, length, bytes): the address and the bytes read.
+struct SpiData {
+  uint32_t address = 0;
+  std::span<const uint8_t> bytes;
+};
+bool parse_spi_reply(const Reply& r, SpiData& out);
 void encode_calibration(const Calibration& c, std::span<uint8_t, kImuCalibSize> out);
 /// Linux hid-nintendo conversion: g = raw * sens / (sens - origin) / 4096;
 /// dps = (raw - offset) * sens / (sens - offset) / 14.247 (zero divisors replaced by 1).

@@ -38,6 +38,9 @@ class ByteTransport {
   /// True when each read returns one whole record (UDP datagram, HID report, USB transfer).
   virtual bool record_framed() const { return false; }
   virtual std::string describe() const = 0;
+  /// Something the user should know about the open transport (e.g. another process has the
+  /// same serial port open and takes bytes from this reader); empty when all is well.
+  virtual std::string warning() const { return {}; }
 };
 
 struct SerialOptions {
@@ -45,7 +48,9 @@ struct SerialOptions {
   int baud = 115200;
   int stop_bits = 1;  ///< 2 for Xsens
 };
-/// Opens a serial port. Returns nullptr and fills err (naming the port) on failure.
+/// Opens a serial port. Returns nullptr and fills err (naming the port) on failure. The port is
+/// taken exclusively (TIOCEXCL and flock): a port another process holds that way fails with a
+/// message saying so; other processes that merely have it open are named in warning().
 std::unique_ptr<ByteTransport> open_serial(const SerialOptions& opt, std::string& err);
 
 /// Binds a UDP socket to "HOST:PORT" (HOST may be 0.0.0.0 or a name). nullptr + err on failure.
