@@ -417,8 +417,9 @@ TEST(Mocapd, DemoPlaysABvhFileWithItsBones) {
 }
 
 // VRChat OSC trackers from the real daemon to liblo's oscdump: once the demo has calibrated
-// itself, every slot and the head arrive as three floats, at heights a standing performer's
-// hip, feet and head have, scaled by outputs.vrchat.height_m (1.925 m over the 1.75 m body).
+// itself, every slot and the head arrive as three floats, at heights a walking performer's
+// hip, feet and head have; the sink scales positions by outputs.vrchat.height_m (1.925 m over
+// the 1.75 m body: 1.1, as it logs).
 TEST(Mocapd, DemoSendsVrchatTrackersThatOscdumpReceives) {
   if (::access("/usr/bin/oscdump", X_OK) != 0) GTEST_SKIP() << "oscdump (liblo-tools) missing";
   const fs::path dir = fs::temp_directory_path() / ("mocap-e2e-vrc-" + std::to_string(getpid()));
@@ -431,7 +432,7 @@ TEST(Mocapd, DemoSendsVrchatTrackersThatOscdumpReceives) {
              "outputs.json.port=" + std::to_string(free_port()), "--set",
              "outputs.posture.shm_name=/mocap-e2e-vrc-" + std::to_string(getpid()), "--set",
              "outputs.vrchat.enabled=true", "--set", "outputs.vrchat.port=" + osc_port, "--set",
-             "outputs.vrchat.height_m=1.925", "--log-level", "warn"},
+             "outputs.vrchat.height_m=1.925", "--log-level", "info"},
             (dir / "mocapd.log").string());
   bool calibrated = false;
   std::string out;
@@ -474,19 +475,23 @@ TEST(Mocapd, DemoSendsVrchatTrackersThatOscdumpReceives) {
       const std::string a = "/tracking/trackers/" + s + kind;
       EXPECT_GE(count[a], 5) << a;  // up to 100 Hz for a second (fewer on a loaded machine)
     }
-  // Unity y is up: the hip (slot 1) about 0.93 m x 1.1 (less while walking), the feet (3, 4)
-  // near the floor, the head about 1.54 m x 1.1 (above the unscaled body's 1.54 m at any time).
+  // The sink scales positions by 1.925 / 1.75; Unity y is up: the hip (slot 1), the feet (3,
+  // 4) near the floor and the head at a walking performer's heights (0.93 m and 1.54 m standing
+  // at 1.75 m, times 1.1).
+  EXPECT_NE(slurp((dir / "mocapd.log.err").string()).find("position scale 1.100"),
+            std::string::npos)
+      << slurp((dir / "mocapd.log.err").string());
   const double hip = last["/tracking/trackers/1/position"][1],
                foot_l = last["/tracking/trackers/3/position"][1],
                foot_r = last["/tracking/trackers/4/position"][1],
                head = last["/tracking/trackers/head/position"][1];
   const std::string heights = "hip " + std::to_string(hip) + " feet " + std::to_string(foot_l) +
                               " " + std::to_string(foot_r) + " head " + std::to_string(head);
-  EXPECT_GT(hip, 0.85) << heights;
-  EXPECT_LT(hip, 1.12) << heights;
-  EXPECT_LT(foot_l, 0.2) << heights;
-  EXPECT_LT(foot_r, 0.2) << heights;
-  EXPECT_GT(head, 1.6) << heights;
-  EXPECT_LT(head, 1.8) << heights;
+  EXPECT_GT(hip, 0.75) << heights;
+  EXPECT_LT(hip, 1.15) << heights;
+  EXPECT_LT(foot_l, 0.25) << heights;
+  EXPECT_LT(foot_r, 0.25) << heights;
+  EXPECT_GT(head, 1.35) << heights;
+  EXPECT_LT(head, 1.85) << heights;
   fs::remove_all(dir);
 }
