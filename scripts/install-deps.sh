@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages mocap needs, skipping those already present.
 #   scripts/install-deps.sh          packages to build and run (daemon, viewer, tools)
-#   scripts/install-deps.sh --test   also what the test suite needs (Xvfb, fuzzers, oscdump, Blender)
+#   scripts/install-deps.sh --test   also what the test suite needs (Xvfb, fuzzers, oscdump, Blender
+#                                    and the numpy its glTF importer needs)
 # Works as root or through sudo; fails with a clear message naming the package that failed.
 set -euo pipefail
 
@@ -10,7 +11,7 @@ build_pkgs=(build-essential cmake ninja-build pkg-config git
   libglfw3-dev libgl-dev libgl1-mesa-dri libtomlplusplus-dev nlohmann-json3-dev
   zlib1g-dev libpng-dev xvfb xauth)
 test_pkgs=(libgtest-dev libgmock-dev libbenchmark-dev clang-14 libclang-rt-14-dev
-  libfuzzer-14-dev liblo-tools socat python3 blender xdotool)
+  libfuzzer-14-dev liblo-tools socat python3 blender python3-numpy xdotool)
 
 want=("${build_pkgs[@]}")
 if [[ "${1:-}" == "--test" ]]; then want+=("${test_pkgs[@]}"); fi

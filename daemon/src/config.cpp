@@ -215,6 +215,33 @@ class TableReader {
     out = v;
   }
 
+  /// An array of lo..hi strings, each a segment name or "" (an unused slot).
+  void segment_names(std::string_view key, std::vector<std::string>& out, std::size_t lo,
+                     std::size_t hi) {
+    const toml::node* n = node(key);
+    if (!n) return;
+    const toml::array* a = n->as_array();
+    if (!a || a->size() < lo || a->size() > hi)
+      return type_error(
+          n, key,
+          ("an array of " + std::to_string(lo) + " to " + std::to_string(hi) + " segment names")
+              .c_str());
+    std::vector<std::string> v;
+    for (const toml::node& e : *a) {
+      const auto s = e.value<std::string>();
+      if (!e.is_string() || !s) return type_error(&e, key, "an array of segment names");
+      if (!s->empty() && !segment_from_name(*s)) {
+        std::string msg = "'" + *s + "' is not a segment name";
+        auto near = nearest_name(
+            *s, std::vector<std::string_view>(kSegmentNames.begin(), kSegmentNames.end()));
+        if (!near.empty()) msg += " (did you mean '" + near + "'?)";
+        return ctx_.add(&e, join(path_, key), msg);
+      }
+      v.push_back(*s);
+    }
+    out = std::move(v);
+  }
+
   /// A sub-table (nullptr if absent or not a table; the latter is reported).
   const toml::table* table(std::string_view key) {
     const toml::node* n = node(key);
@@ -537,6 +564,20 @@ Config read_root(const toml::table& root, Ctx& ctx) {
                 "outputs.vmc.host", "'" + c.outputs.vmc.host + "' is not an IPv4 address");
     }
     {
+      TableReader v(o.table("vrchat"), outs, "outputs.vrchat", ctx);
+      auto& vr = c.outputs.vrchat;
+      v.boolean("enabled", vr.enabled);
+      v.str("host", vr.host);
+      v.integer("port", vr.port, 1, 65535);
+      v.segment_names("trackers", vr.trackers, 1, 8);
+      v.boolean("head", vr.head);
+      v.num("height_m", vr.height_m, 0, 3);
+      v.finish();
+      if (!valid_ipv4(vr.host))
+        ctx.add(outs->get("vrchat") ? outs->get_as<toml::table>("vrchat")->get("host") : nullptr,
+                "outputs.vrchat.host", "'" + vr.host + "' is not an IPv4 address");
+    }
+    {
       TableReader s(o.table("posture"), outs, "outputs.posture", ctx);
       s.boolean("enabled", c.outputs.posture.enabled);
       s.str("shm_name", c.outputs.posture.shm_name);
@@ -798,6 +839,17 @@ std::string config_to_toml(const Config& c) {
   outs.insert("vmc", toml::table{{"enabled", c.outputs.vmc.enabled},
                                  {"host", c.outputs.vmc.host},
                                  {"port", c.outputs.vmc.port}});
+  {
+    toml::array trackers;
+    for (const auto& t : c.outputs.vrchat.trackers)
+      trackers.push_back(t);
+    outs.insert("vrchat", toml::table{{"enabled", c.outputs.vrchat.enabled},
+                                      {"host", c.outputs.vrchat.host},
+                                      {"port", c.outputs.vrchat.port},
+                                      {"trackers", std::move(trackers)},
+                                      {"head", c.outputs.vrchat.head},
+                                      {"height_m", c.outputs.vrchat.height_m}});
+  }
   outs.insert("posture", toml::table{{"enabled", c.outputs.posture.enabled},
                                      {"shm_name", c.outputs.posture.shm_name}});
   root.insert("outputs", std::move(outs));

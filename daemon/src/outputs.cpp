@@ -1,10 +1,12 @@
-// Builds the configured frame outputs: posture shared memory, JSON/TCP stream, VMC/OSC sender.
+// Builds the configured frame outputs: posture shared memory, JSON/TCP stream, VMC/OSC and VRChat
+// OSC senders.
 #include "mocap/daemon/outputs.hpp"
 
 #include <stdexcept>
 
 #include "mocap/daemon/json_stream.hpp"
 #include "mocap/daemon/vmc.hpp"
+#include "mocap/daemon/vrchat.hpp"
 #include "mocap/skeleton/posture_shm.hpp"
 
 namespace mocap::daemon {
@@ -54,6 +56,27 @@ class VmcSink final : public FrameSink {
   VmcSender sender_;
 };
 
+class VrchatSink final : public FrameSink {
+ public:
+  VrchatSink(const VrchatOutputConfig& c, double model_height_m, Logger& log) {
+    VrchatSender::Options o;
+    o.host = c.host;
+    o.port = static_cast<uint16_t>(c.port);
+    o.slots.fill(-1);
+    for (std::size_t i = 0; i < c.trackers.size() && i < o.slots.size(); ++i)
+      if (const auto s = segment_from_name(c.trackers[i])) o.slots[i] = index(*s);
+    o.head = c.head;
+    o.scale = c.height_m > 0 && model_height_m > 0 ? c.height_m / model_height_m : 1.0;
+    std::string err;
+    if (!sender_.open(o, &err)) throw std::runtime_error("outputs.vrchat: " + err);
+    log.info("VRChat OSC trackers to %s:%d (position scale %.3f)", c.host.c_str(), c.port, o.scale);
+  }
+  void publish(const PoseFrame& f) override { sender_.publish(f); }
+
+ private:
+  VrchatSender sender_;
+};
+
 }  // namespace
 
 std::vector<std::unique_ptr<FrameSink>> make_outputs(const Config& cfg, Logger& log) {
@@ -72,6 +95,8 @@ std::vector<std::unique_ptr<FrameSink>> make_outputs(const Config& cfg, Logger& 
     out.push_back(
         std::make_unique<JsonSink>(cfg.outputs.json, cfg.pipeline.realtime_priority, log));
   if (cfg.outputs.vmc.enabled) out.push_back(std::make_unique<VmcSink>(cfg.outputs.vmc, log));
+  if (cfg.outputs.vrchat.enabled)
+    out.push_back(std::make_unique<VrchatSink>(cfg.outputs.vrchat, cfg.body.model.height_m, log));
   return out;
 }
 

@@ -459,3 +459,42 @@ TEST(Config, BodyErrorsNameTheirFileAndLine) {
             std::string::npos)
       << errs.to_string();
 }
+
+TEST(Config, VrchatOutputTrackersHeadAndHeight) {
+  ConfigErrors errs;
+  auto c = parse(
+      "[outputs.vrchat]\nenabled = true\nhost = \"192.168.1.40\"\nport = 9001\n"
+      "trackers = [\"pelvis\", \"\", \"foot_l\", \"foot_r\"]\nhead = false\nheight_m = 1.62\n",
+      errs);
+  ASSERT_TRUE(c) << errs.to_string();
+  const auto& v = c->outputs.vrchat;
+  EXPECT_TRUE(v.enabled);
+  EXPECT_EQ(v.host, "192.168.1.40");
+  EXPECT_EQ(v.port, 9001);
+  EXPECT_EQ(v.trackers, (std::vector<std::string>{"pelvis", "", "foot_l", "foot_r"}));
+  EXPECT_FALSE(v.head);
+  EXPECT_DOUBLE_EQ(v.height_m, 1.62);
+  const std::string printed = config_to_toml(*c);
+  auto c2 = parse_config(printed, "printed", {}, errs);
+  ASSERT_TRUE(c2) << errs.to_string() << printed;
+  EXPECT_EQ(c2->outputs.vrchat.trackers, v.trackers);
+  EXPECT_EQ(c2->outputs.vrchat.port, 9001);
+
+  const Config defaults;
+  EXPECT_FALSE(defaults.outputs.vrchat.enabled);
+  EXPECT_EQ(defaults.outputs.vrchat.port, 9000);
+  EXPECT_EQ(defaults.outputs.vrchat.trackers.size(), 8u);
+
+  ConfigErrors bad;
+  EXPECT_FALSE(
+      parse("[outputs.vrchat]\ntrackers = [\"pelvis\", \"shank_left\"]\nhost = \"x\"\n"
+            "height_m = 4\n",
+            bad));
+  const std::string all = bad.to_string();
+  EXPECT_NE(all.find("outputs.vrchat.trackers: 'shank_left' is not a segment name (did you "
+                     "mean 'shank_l'?)"),
+            std::string::npos)
+      << all;
+  EXPECT_NE(all.find("outputs.vrchat.host"), std::string::npos) << all;
+  EXPECT_NE(all.find("outputs.vrchat.height_m: 4 is out of range"), std::string::npos) << all;
+}

@@ -1,11 +1,13 @@
 // Tests of `mocap export`: the real command run on real session files (CSV values, a torn tail,
-// a file of an unknown version, usage errors).
+// a file of an unknown version, usage errors, BVH, glTF and OpenSim output).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <Eigen/Geometry>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 
@@ -212,4 +214,61 @@ TEST(SessionExport, BridgesDropoutsAndResamples) {
   EXPECT_EQ(clip.frame_count, 30);
   EXPECT_NEAR(clip.frame_time_s, 0.020, 1e-9);
   EXPECT_EQ(run(ses + " --bvh " + dir.file("d.bvh") + " --rate 0", err), 2);
+}
+
+TEST(SessionExport, GltfAndOpenSimFromTheRecordedTake) {
+  TempDir dir;
+  const std::string ses = dir.file("g.mocap"), err = dir.file("err");
+  auto header = make_header();
+  header.config_text = "[body]\nheight_m = 1.62\n[pipeline]\nrate_hz = 100\n";
+  std::mt19937 rng(5);
+  std::vector<PoseFrame> poses;
+  {
+    std::string e;
+    auto w = SessionWriter::create(ses, header, {}, &e);
+    ASSERT_TRUE(w) << e;
+    for (uint64_t i = 0; i < 6; ++i) {
+      poses.push_back(consistent_pose(i, rng));
+      ASSERT_TRUE(w->append_pose(poses.back()));
+    }
+    ASSERT_TRUE(w->close());
+  }
+  // glTF: the container and the time accessor's frame count and range.
+  ASSERT_EQ(run(ses + " --gltf " + dir.file("g.glb"), err), 0) << read_text(err);
+  const std::string glb = read_text(dir.file("g.glb"));
+  ASSERT_GT(glb.size(), 20u);
+  EXPECT_EQ(glb.substr(0, 4), "glTF");
+  uint32_t json_len = 0;
+  std::memcpy(&json_len, glb.data() + 12, 4);
+  const auto j = nlohmann::json::parse(glb.substr(20, json_len));
+  const auto& time = j["accessors"][j["animations"][0]["samplers"][0]["input"].get<int>()];
+  EXPECT_EQ(time["count"], 6);
+  EXPECT_NEAR(time["max"][0].get<double>(), 0.05, 1e-6);
+  EXPECT_EQ(j["nodes"][0]["name"], "Hips");
+  // OpenSim: header, 6 rows at the recorded rate, the pelvis in OpenSim's axes.
+  ASSERT_EQ(run(ses + " --opensim " + dir.file("g.sto"), err), 0) << read_text(err);
+  std::istringstream sto(read_text(dir.file("g.sto")));
+  std::string line;
+  std::getline(sto, line);
+  EXPECT_EQ(line, "DataRate=100.000000");
+  while (std::getline(sto, line) && line != "endheader") {
+  }
+  std::getline(sto, line);
+  EXPECT_EQ(line.rfind("time\tpelvis_imu\ttorso_imu\tfemur_r_imu", 0), 0u) << line;
+  int rows = 0;
+  while (std::getline(sto, line)) {
+    std::istringstream ls(line);
+    double t = 0, w = 0, x = 0, y = 0, z = 0;
+    char comma = 0;
+    ls >> t >> w >> comma >> x >> comma >> y >> comma >> z;
+    ASSERT_FALSE(ls.fail()) << line;
+    EXPECT_NEAR(t, 0.01 * rows, 1e-9);
+    const auto& q = poses[rows].q_earth_segment[0];
+    // x_o = x, y_o = z, z_o = -y (a proper rotation: the vector part maps likewise).
+    const Eigen::Quaterniond expect(q[0], q[1], q[3], -q[2]);
+    EXPECT_GT(std::abs(expect.normalized().dot(Eigen::Quaterniond(w, x, y, z))), 1 - 1e-6);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 6);
+  EXPECT_EQ(run(ses + " --gltf a.glb --bvh b.bvh", err), 2);  // one output at a time
 }

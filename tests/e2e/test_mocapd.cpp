@@ -1,7 +1,7 @@
 // End to end: the real mocapd binary with --demo (virtual performer -> witmotion bytes -> ptys
 // -> real drivers -> pipeline), driven by the real mocapctl, read by a TCP client; a recording
 // made over the control socket replays bit-identically with `mocap replay`; SIGTERM while
-// recording exits cleanly with a readable session.
+// recording exits cleanly with a readable session; VRChat OSC trackers reach oscdump.
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -428,6 +429,86 @@ TEST(Mocapd, DemoPlaysABvhFileWithItsBones) {
   }
   kill(d, SIGTERM);
   EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  fs::remove_all(dir);
+}
+
+// VRChat OSC trackers from the real daemon to liblo's oscdump: once the demo has calibrated
+// itself, every slot and the head arrive as three floats, at heights a walking performer's
+// hip, feet and head have; the sink scales positions by outputs.vrchat.height_m (1.925 m over
+// the 1.75 m body: 1.1, as it logs).
+TEST(Mocapd, DemoSendsVrchatTrackersThatOscdumpReceives) {
+  if (::access("/usr/bin/oscdump", X_OK) != 0) GTEST_SKIP() << "oscdump (liblo-tools) missing";
+  const fs::path dir = fs::temp_directory_path() / ("mocap-e2e-vrc-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string sock = (dir / "ctl.sock").string();
+  const std::string osc_port = std::to_string(free_port());
+  const pid_t dump = spawn({"/usr/bin/oscdump", "-L", osc_port}, (dir / "osc.txt").string());
+  const pid_t d =
+      spawn({kBin + "mocapd", "--demo", "--set", "daemon.control_socket=" + sock, "--set",
+             "outputs.json.port=" + std::to_string(free_port()), "--set",
+             "outputs.posture.shm_name=/mocap-e2e-vrc-" + std::to_string(getpid()), "--set",
+             "outputs.vrchat.enabled=true", "--set", "outputs.vrchat.port=" + osc_port, "--set",
+             "outputs.vrchat.height_m=1.925", "--log-level", "info"},
+            (dir / "mocapd.log").string());
+  bool calibrated = false;
+  std::string out;
+  for (int i = 0; i < 250 && !calibrated; ++i) {
+    std::this_thread::sleep_for(100ms);
+    if (run({kBin + "mocapctl", "--socket", sock, "status", "--json"}, &out) != 0) continue;
+    try {
+      calibrated = nlohmann::json::parse(out)["calibrated"].get<bool>();
+    } catch (const std::exception&) {
+    }
+  }
+  const std::size_t calibrated_at = slurp((dir / "osc.txt").string()).size();
+  if (calibrated) std::this_thread::sleep_for(1000ms);
+  kill(d, SIGTERM);
+  EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  kill(dump, SIGTERM);
+  wait_exit(dump);
+  ASSERT_TRUE(calibrated) << out << slurp((dir / "mocapd.log.err").string());
+
+  // Lines "<timetag> <address> fff x y z" after the calibration.
+  std::istringstream in(slurp((dir / "osc.txt").string()).substr(calibrated_at));
+  std::string line;
+  std::getline(in, line);  // possibly cut at calibrated_at
+  std::map<std::string, int> count;
+  std::map<std::string, std::array<double, 3>> last;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string tt, address, types;
+    std::array<double, 3> v{};
+    ls >> tt >> address >> types >> v[0] >> v[1] >> v[2];
+    if (ls.fail()) continue;  // a line cut by SIGTERM
+    EXPECT_EQ(address.rfind("/tracking/trackers/", 0), 0u) << line;
+    EXPECT_EQ(types, "fff") << line;
+    ++count[address];
+    last[address] = v;
+  }
+  const std::vector<std::string> slots = {"1", "2", "3", "4", "5", "6", "7", "8", "head"};
+  for (const auto& s : slots)
+    for (const char* kind : {"/position", "/rotation"}) {
+      const std::string a = "/tracking/trackers/" + s + kind;
+      EXPECT_GE(count[a], 5) << a;  // up to 100 Hz for a second (fewer on a loaded machine)
+    }
+  // The sink scales positions by 1.925 / 1.75; Unity y is up: the hip (slot 1), the feet (3,
+  // 4) near the floor and the head at a walking performer's heights (0.93 m and 1.54 m standing
+  // at 1.75 m, times 1.1).
+  EXPECT_NE(slurp((dir / "mocapd.log.err").string()).find("position scale 1.100"),
+            std::string::npos)
+      << slurp((dir / "mocapd.log.err").string());
+  const double hip = last["/tracking/trackers/1/position"][1],
+               foot_l = last["/tracking/trackers/3/position"][1],
+               foot_r = last["/tracking/trackers/4/position"][1],
+               head = last["/tracking/trackers/head/position"][1];
+  const std::string heights = "hip " + std::to_string(hip) + " feet " + std::to_string(foot_l) +
+                              " " + std::to_string(foot_r) + " head " + std::to_string(head);
+  EXPECT_GT(hip, 0.75) << heights;
+  EXPECT_LT(hip, 1.15) << heights;
+  EXPECT_LT(foot_l, 0.25) << heights;
+  EXPECT_LT(foot_r, 0.25) << heights;
+  EXPECT_GT(head, 1.35) << heights;
+  EXPECT_LT(head, 1.85) << heights;
   fs::remove_all(dir);
 }
 

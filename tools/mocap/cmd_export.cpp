@@ -1,7 +1,8 @@
 // mocap export: converts the poses recorded in a session file (docs/session-format.md) to CSV
-// (t,segment,w,x,y,z,px,py,pz: one row per segment per frame) or BVH (the skeleton's BvhWriter,
-// body height from the recorded configuration). A torn or corrupt tail is reported and
-// everything before it is exported.
+// (t,segment,w,x,y,z,px,py,pz: one row per segment per frame), BVH (the skeleton's BvhWriter,
+// body height from the recorded configuration), binary glTF (GltfWriter) or an OpenSense
+// orientations table (OpenSimWriter). A torn or corrupt tail is reported and everything before
+// it is exported.
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -16,17 +17,23 @@
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
 #include "mocap/skeleton/dropout_bridge.hpp"
+#include "mocap/skeleton/gltf.hpp"
 #include "mocap/skeleton/interpolation.hpp"
+#include "mocap/skeleton/opensim.hpp"
 
 namespace mocap::cmd {
 namespace {
 
 constexpr const char* kExportUsage =
-    "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh) [--rate HZ]\n"
+    "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh | --gltf OUT.glb |\n"
+    "                             --opensim OUT.sto) [--rate HZ]\n"
     "Converts the poses recorded in SESSION. CSV columns: t (seconds since the recording\n"
     "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n"
-    "BVH: N-pose rest, centimetres, the recorded body, resampled to one fixed frame time (the\n"
-    "recorded pipeline rate or --rate). A sensor's dropout of up to 0.5 s is bridged (its\n"
+    "BVH: N-pose rest, centimetres, the recorded body. glTF: binary .glb, one node per segment\n"
+    "named like the BVH bones, a skin, one animation (rotations, root translation), metres.\n"
+    "OpenSim: an OpenSense orientations table (pelvis_imu, femur_r_imu, ...: w,x,y,z in\n"
+    "OpenSim's y-up ground frame). BVH, glTF and OpenSim are resampled to one fixed frame time\n"
+    "(the recorded pipeline rate or --rate). A sensor's dropout of up to 0.5 s is bridged (its\n"
     "segment slerped across the gap).\n";
 
 /// Tells the user how reading ended when it did not end cleanly.
@@ -105,16 +112,35 @@ bool write_csv_row(std::FILE* f, double t, int s, const PoseFrame& p) {
                       q[1], q[2], q[3], x[0], x[1], x[2]) > 0;
 }
 
-int export_poses(SessionReader& r, const std::string& in, const std::string& out, bool bvh,
+enum class Format { csv, bvh, gltf, opensim };
+
+int export_poses(SessionReader& r, const std::string& in, const std::string& out, Format format,
                  double rate_hz) {
   const daemon::Config cfg = recorded_config(r, in);
   const BodyModel body(cfg.body.model);
-  // BVH has one fixed frame time: resample to the recorded pipeline rate unless told otherwise.
-  if (bvh && rate_hz <= 0) rate_hz = cfg.pipeline.rate_hz;
+  // BVH, glTF and OpenSim have one fixed frame time: resample to the recorded pipeline rate
+  // unless told otherwise.
+  if (format != Format::csv && rate_hz <= 0) rate_hz = cfg.pipeline.rate_hz;
   FinishedPoses poses(body.dimensions(), rate_hz);
   long frames = 0;
   try {
-    if (bvh) {
+    if (format == Format::gltf) {
+      GltfWriterOptions opt;
+      opt.frame_time_s = 1.0 / rate_hz;
+      GltfWriter writer(out, body, opt);
+      poses.run(r, [&](const PoseFrame& f) {
+        writer.write_frame(f);
+        ++frames;
+      });
+      writer.close();
+    } else if (format == Format::opensim) {
+      OpenSimWriter writer(out, {.rate_hz = rate_hz});
+      poses.run(r, [&](const PoseFrame& f) {
+        writer.write_frame(f);
+        ++frames;
+      });
+      writer.close();
+    } else if (format == Format::bvh) {
       BvhWriterOptions opt;
       opt.frame_time_s = 1.0 / rate_hz;
       BvhWriter writer(out, body, opt);
@@ -160,6 +186,8 @@ int run_export(int argc, char** argv) {
   CliArgs args;
   args.option("csv", "write the poses as CSV to this file")
       .option("bvh", "write the poses as BVH to this file")
+      .option("gltf", "write the poses as binary glTF (.glb) to this file")
+      .option("opensim", "write an OpenSense orientations table (.sto) to this file")
       .option("rate", "resample to this frame rate, Hz (BVH default: the recorded pipeline rate)")
       .flag("help", "show this help");
   if (!args.parse(argc, argv, 1)) {
@@ -170,7 +198,9 @@ int run_export(int argc, char** argv) {
     std::printf("%s%s", kExportUsage, args.help().c_str());
     return 0;
   }
-  if (args.positional().size() != 1 || args.has("csv") == args.has("bvh")) {
+  const int outputs = int(args.has("csv")) + int(args.has("bvh")) + int(args.has("gltf")) +
+                      int(args.has("opensim"));
+  if (args.positional().size() != 1 || outputs != 1) {
     std::fprintf(stderr, "%s", kExportUsage);
     return 2;
   }
@@ -187,8 +217,11 @@ int run_export(int argc, char** argv) {
     std::fprintf(stderr, "mocap export: --rate must be in (0, 10000] Hz\n");
     return 2;
   }
-  if (args.has("csv")) return export_poses(reader, in, *args.get("csv"), false, rate_hz);
-  return export_poses(reader, in, *args.get("bvh"), true, rate_hz);
+  if (args.has("csv")) return export_poses(reader, in, *args.get("csv"), Format::csv, rate_hz);
+  if (args.has("gltf")) return export_poses(reader, in, *args.get("gltf"), Format::gltf, rate_hz);
+  if (args.has("opensim"))
+    return export_poses(reader, in, *args.get("opensim"), Format::opensim, rate_hz);
+  return export_poses(reader, in, *args.get("bvh"), Format::bvh, rate_hz);
 }
 
 }  // namespace mocap::cmd

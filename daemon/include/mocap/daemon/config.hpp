@@ -97,6 +97,18 @@ struct VmcOutputConfig {
   int port = 39539;
 };
 
+/// VRChat OSC trackers (docs/streaming.md section 3).
+struct VrchatOutputConfig {
+  bool enabled = false;
+  std::string host = "127.0.0.1";
+  int port = 9000;
+  /// Segment sent as tracker 1..8 (1 to 8 names; a slot named "" is not sent).
+  std::vector<std::string> trackers = {"pelvis",  "torso",   "foot_l",    "foot_r",
+                                       "shank_l", "shank_r", "forearm_l", "forearm_r"};
+  bool head = true;     ///< also send the head (/tracking/trackers/head/...) for alignment
+  double height_m = 0;  ///< the user's height as VRChat knows it; 0 = the body model's height
+};
+
 struct PostureOutputConfig {
   bool enabled = true;
   std::string shm_name;  ///< "" = "/mocap-posture-<uid>"
@@ -105,6 +117,7 @@ struct PostureOutputConfig {
 struct OutputsConfig {
   JsonOutputConfig json;
   VmcOutputConfig vmc;
+  VrchatOutputConfig vrchat;
   PostureOutputConfig posture;
 };
 

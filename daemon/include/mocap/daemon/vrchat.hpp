@@ -1,0 +1,80 @@
+// VRChat OSC trackers sender (OSC over UDP): up to 8 body segments as VRChat's OSC trackers
+// (/tracking/trackers/1..8/position and /rotation) plus the head for alignment
+// (/tracking/trackers/head/...), in Unity's left-handed Y-up world frame with Euler angles in
+// degrees in Unity's order (Z, then X, then Y). docs/streaming.md section 3.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "mocap/skeleton/pose_frame.hpp"
+
+namespace mocap::daemon {
+
+inline constexpr int kVrchatTrackerSlots = 8;
+
+/// Unity Euler angles (degrees) of a rotation given as a Unity quaternion x, y, z, w: the
+/// angles (x, y, z) with q = AngleAxis(y, up) * AngleAxis(x, right) * AngleAxis(z, forward),
+/// i.e. Unity's Quaternion.Euler(x, y, z) (z applied first, then x, then y). x in [-90, 90],
+/// y and z in (-180, 180]; at x = +-90 (gimbal lock) z is 0.
+std::array<float, 3> unity_euler_deg(const std::array<double, 4>& q_unity_xyzw) noexcept;
+
+/// One tracker as VRChat receives it: Unity world position (metres) and Euler angles (degrees).
+struct VrchatTracker {
+  std::array<float, 3> p{};
+  std::array<float, 3> euler_deg{};
+};
+
+/// Converts segment s of a frame: our ENU position and orientation to Unity's frame
+/// (x right = -y, y up = z, z forward = x; determinant -1), position times scale. False if the
+/// frame holds a non-finite value for it.
+bool vrchat_tracker_from_frame(const PoseFrame& frame, int segment, double scale,
+                               VrchatTracker& out) noexcept;
+
+class VrchatSender {
+ public:
+  struct Options {
+    std::string host = "127.0.0.1";  ///< IPv4 address of VRChat (a Quest on the LAN)
+    uint16_t port = 9000;            ///< VRChat's OSC input port
+    int min_interval_ms = 10;        ///< frames closer than this are skipped (<= 100 Hz)
+    /// Segment index per tracker slot 1..8; -1 leaves the slot unsent.
+    std::array<int, kVrchatTrackerSlots> slots{
+        index(Segment::pelvis),    index(Segment::torso),    index(Segment::foot_l),
+        index(Segment::foot_r),    index(Segment::shank_l),  index(Segment::shank_r),
+        index(Segment::forearm_l), index(Segment::forearm_r)};
+    bool head = true;    ///< also send /tracking/trackers/head/position|rotation
+    double scale = 1.0;  ///< positions are multiplied by this (user height / model height)
+  };
+  struct Stats {
+    uint64_t frames_sent = 0;
+    uint64_t frames_rate_limited = 0;  ///< skipped by min_interval_ms
+    uint64_t frames_invalid = 0;       ///< skipped: non-finite values
+    uint64_t messages_sent = 0;        ///< one UDP datagram per OSC message
+    uint64_t send_errors = 0;          ///< sendto failures (e.g. EAGAIN); the message is lost
+  };
+
+  VrchatSender() = default;
+  ~VrchatSender();
+  VrchatSender(const VrchatSender&) = delete;
+  VrchatSender& operator=(const VrchatSender&) = delete;
+
+  /// Creates the UDP socket. False with a message if the address is invalid.
+  bool open(const Options& options, std::string* error);
+  /// Pipeline thread: encodes and sends one frame, each OSC message as its own datagram
+  /// (non-blocking sendto, no allocation). The frame time drives the rate limit.
+  bool publish(const PoseFrame& frame) noexcept;
+  const Stats& stats() const { return stats_; }
+
+ private:
+  Options options_;
+  int fd_ = -1;
+  unsigned char addr_[16] = {};  // sockaddr_in
+  int64_t last_t_ns_ = 0;
+  bool sent_any_ = false;
+  uint8_t message_[128];
+  Stats stats_;
+};
+
+}  // namespace mocap::daemon
