@@ -328,9 +328,16 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
                          "outputs.posture.shm_name=/mocap-e2e-cal-" + std::to_string(getpid()),
                          "--log-level", "info"},
                         (dir / "mocapd.log").string());
+  // A failed assertion returns early: the daemon must not outlive the test.
+  struct KillOnExit {
+    pid_t pid;
+    ~KillOnExit() {
+      if (pid > 0 && kill(pid, SIGKILL) == 0) waitpid(pid, nullptr, 0);
+    }
+  } guard{d};
   nlohmann::json st;
   bool calibrated = false;
-  for (int i = 0; i < 150 && !calibrated; ++i) {
+  for (int i = 0; i < 300 && !calibrated; ++i) {
     std::this_thread::sleep_for(100ms);
     std::string out;
     if (run({kBin + "mocapctl", "--socket", sock, "status", "--json"}, &out) != 0) continue;
@@ -374,6 +381,7 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
   }
   kill(d, SIGTERM);
   EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  guard.pid = -1;
   fs::remove_all(dir);
 }
 
