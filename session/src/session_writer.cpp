@@ -62,11 +62,20 @@ SessionWriter::~SessionWriter() {
 std::unique_ptr<SessionWriter> SessionWriter::create(const std::string& path,
                                                      const session::SessionHeader& header,
                                                      Options options, std::string* error) {
-  std::vector<uint8_t> bytes;
-  if (!session::encode_file_header(header, bytes, error)) return nullptr;
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) {
     if (error) *error = "cannot create session file '" + path + "': " + describe(errno);
+    return nullptr;
+  }
+  return create_fd(fd, path, header, std::move(options), error);
+}
+
+std::unique_ptr<SessionWriter> SessionWriter::create_fd(int fd, const std::string& path,
+                                                        const session::SessionHeader& header,
+                                                        Options options, std::string* error) {
+  std::vector<uint8_t> bytes;
+  if (!session::encode_file_header(header, bytes, error)) {
+    ::close(fd);
     return nullptr;
   }
   std::size_t written = 0;

@@ -38,7 +38,12 @@ TEST(ControlProtocol, ParsesCommands) {
   ASSERT_TRUE(r);
   EXPECT_EQ(r->command, ControlCommand::record_start);
   EXPECT_EQ(r->argument, "/tmp/my session.mcap");
-  for (const char* s : {"status", "calibrate npose", "reset-heading", "record stop", "quit"}) {
+  r = parse_control_request("record start", err);  // no name: the daemon picks a fresh one
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->command, ControlCommand::record_start);
+  EXPECT_EQ(r->argument, "");
+  for (const char* s :
+       {"status", "calibrate npose", "reset-heading", "record start", "record stop", "quit"}) {
     auto q = parse_control_request(s, err);
     ASSERT_TRUE(q) << s;
     EXPECT_EQ(format_control_request(*q), std::string(s) + "\n");
@@ -52,7 +57,7 @@ TEST(ControlProtocol, RejectsBadRequests) {
   EXPECT_NE(err.find("usage: calibrate"), std::string::npos);
   EXPECT_FALSE(parse_control_request("calibrate apose", err));
   EXPECT_FALSE(parse_control_request("status now", err));
-  EXPECT_FALSE(parse_control_request("record start", err));
+  EXPECT_FALSE(parse_control_request("record begin", err));
   EXPECT_FALSE(parse_control_request("sudo rm", err));
   EXPECT_NE(err.find("unknown command 'sudo'"), std::string::npos) << err;
   EXPECT_FALSE(parse_control_request(std::string("stat\0us", 7), err));

@@ -22,7 +22,8 @@ enum class ControlCommand { status, calibrate, reset_heading, record_start, reco
 
 struct ControlRequest {
   ControlCommand command = ControlCommand::status;
-  std::string argument;  ///< "npose"/"tpose" for calibrate, the file for record start
+  std::string argument;  ///< "npose"/"tpose" for calibrate, the file for record start ("" = fresh)
+  bool unique = false;   ///< record start (not on the wire): a -N suffix if the name is taken
 };
 
 /// Parses one request line (without or with its trailing newline). Returns the request, or
