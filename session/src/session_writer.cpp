@@ -78,6 +78,9 @@ std::unique_ptr<SessionWriter> SessionWriter::create_fd(int fd, const std::strin
     ::close(fd);
     return nullptr;
   }
+  // The header again in header_copy blocks: one damaged header byte loses nothing.
+  const std::vector<uint8_t> prefix = bytes;
+  session::encode_header_copy_blocks(prefix, bytes);
   std::size_t written = 0;
   int err = write_all(fd, bytes.data(), bytes.size(), written);
   if (!err) err = sync_fd(fd);
