@@ -2,6 +2,7 @@
 // file:line:column errors, unknown keys rejected with the nearest valid name, --set overrides,
 // and the effective configuration printed back as TOML.
 #include "mocap/daemon/config.hpp"
+#include "mocap/core/runtime_dir.hpp"
 #include "mocap/core/text_check.hpp"
 
 #include <arpa/inet.h>
@@ -74,9 +75,10 @@ LogLevel log_level_of(std::string_view name) {
 }
 
 std::string default_control_socket() {
-  if (const char* dir = std::getenv("XDG_RUNTIME_DIR"); dir && *dir)
-    return std::string(dir) + "/mocapd.sock";
-  return "/tmp/mocapd-" + std::to_string(getuid()) + ".sock";
+  std::string error;
+  const std::string dir = private_runtime_dir(&error);
+  if (dir.empty()) throw std::runtime_error(error);
+  return dir + "/mocapd.sock";
 }
 
 namespace {

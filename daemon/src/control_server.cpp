@@ -286,6 +286,18 @@ std::string control_call(const std::string& path, std::string_view request_line,
   if (fd < 0)
     throw std::runtime_error("cannot reach mocapd at " + path + ": " + std::strerror(errno) +
                              " (is it running?)");
+  // Only a daemon of our own user (or root) gets our commands and is believed: another user
+  // may have created the socket first.
+  ucred cred{};
+  socklen_t cred_len = sizeof cred;
+  if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &cred_len) != 0 ||
+      (cred.uid != ::geteuid() && cred.uid != 0)) {
+    ::close(fd);
+    throw std::runtime_error("refusing " + path + ": it is served by uid " +
+                             std::to_string(cred.uid) + " (pid " + std::to_string(cred.pid) +
+                             "), not by us (uid " + std::to_string(::geteuid()) +
+                             "); another user's process, not our mocapd");
+  }
   std::string line(request_line);
   if (line.empty() || line.back() != '\n') line += '\n';
   if (!write_all(fd, line)) {

@@ -105,9 +105,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "mocapctl: %s\n", args.error().c_str());
     return 2;
   }
-  const std::string path = args.get_or("socket", mocap::daemon::default_control_socket());
   std::string reply;
   try {
+    const std::string path =
+        args.has("socket") ? *args.get("socket") : mocap::daemon::default_control_socket();
     reply = mocap::daemon::control_call(path, mocap::daemon::format_control_request(*req),
                                         static_cast<int>(timeout));
   } catch (const std::exception& e) {

@@ -1,6 +1,13 @@
 // Builds the configured frame outputs: posture shared memory, JSON/TCP stream, VMC/OSC sender.
 #include "mocap/daemon/outputs.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <stdexcept>
 
 #include "mocap/daemon/json_stream.hpp"
@@ -11,12 +18,34 @@ namespace mocap::daemon {
 
 namespace {
 
+/// Holds an exclusive flock on the shared-memory object for the daemon's life: a second mocapd
+/// publishing under the same name is refused before it creates (or, on exit, removes) anything.
+class ShmOwner {
+ public:
+  explicit ShmOwner(const std::string& name) {
+    fd_ = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+    if (fd_ < 0) throw std::runtime_error("shm_open " + name + ": " + std::strerror(errno));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      throw std::runtime_error("shared posture " + name +
+                               " is in use by another mocapd (left untouched)");
+    }
+  }
+  ~ShmOwner() { ::close(fd_); }  // after the writer has removed the object
+  ShmOwner(const ShmOwner&) = delete;
+  ShmOwner& operator=(const ShmOwner&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 class PostureSink final : public FrameSink {
  public:
-  explicit PostureSink(std::string name) : writer_(std::move(name)) {}
+  explicit PostureSink(std::string name) : owner_(name), writer_(std::move(name)) {}
   void publish(const PoseFrame& f) override { writer_.publish(f); }
 
  private:
+  ShmOwner owner_;  // declared first: locked before the writer exists, released after it
   PostureWriter writer_;
 };
 

@@ -149,12 +149,28 @@ bool SessionReader::read_header(const std::string& name, std::string* error) {
     skip_header_copies();
     return true;
   }
+  // An intact header (valid CRC) of another version is that version, not damage.
+  if (msg.find("is not supported") != std::string::npos && primary_crc_ok()) {
+    if (error) *error = name + ": " + msg;
+    return false;
+  }
   if (recover_header(&header_damage_)) {
     header_damage_ = msg;
     return true;
   }
   if (error) *error = name + ": " + msg;
   return false;
+}
+
+bool SessionReader::primary_crc_ok() {
+  uint8_t fixed[kFixedHeaderBytes];
+  if (read_at(0, fixed, sizeof fixed) != sizeof fixed) return false;
+  const uint32_t len = get_u32(fixed + 16);
+  if (len > kMaxHeaderBytes || len + 24ull > size_) return false;
+  std::vector<uint8_t> buf(sizeof fixed + len + 4);
+  if (read_at(0, buf.data(), buf.size()) != buf.size()) return false;
+  const auto crc = crc32(0L, buf.data(), static_cast<uInt>(buf.size() - 4));
+  return static_cast<uint32_t>(crc) == get_u32(buf.data() + buf.size() - 4);
 }
 
 void SessionReader::skip_header_copies() {

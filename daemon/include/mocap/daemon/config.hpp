@@ -204,7 +204,8 @@ std::string nearest_name(std::string_view word, const std::vector<std::string_vi
 
 /// Log level of a name validated by the loader.
 LogLevel log_level_of(std::string_view name);
-/// "$XDG_RUNTIME_DIR/mocapd.sock" (or /tmp/mocapd-<uid>.sock without XDG_RUNTIME_DIR).
+/// "<runtime dir>/mocapd.sock": $XDG_RUNTIME_DIR, else a private 0700 directory
+/// (mocap/core/runtime_dir.hpp). Throws std::runtime_error when there is none.
 std::string default_control_socket();
 
 }  // namespace mocap::daemon

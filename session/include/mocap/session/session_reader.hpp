@@ -85,6 +85,7 @@ class SessionReader {
   enum class Parse : uint8_t { ok, skip, eof, bad };
   bool read_header(const std::string& name, std::string* error);
   bool recover_header(std::string* why);
+  bool primary_crc_ok();
   void skip_header_copies();
   bool stop(End end, std::string reason);
   std::size_t read_at(uint64_t offset, uint8_t* dst, std::size_t n);
