@@ -159,6 +159,15 @@ struct Config {
   std::vector<SensorConfig> sensors;
 };
 
+/// Limits of a configuration: its size, the problems reported before checking stops, and the
+/// length of a key or message in a report (longer ones are cut, never echoed whole).
+inline constexpr std::size_t kMaxConfigBytes = 1u << 20;
+inline constexpr std::size_t kMaxConfigErrors = 50;
+inline constexpr std::size_t kMaxConfigMessageKey = 120;
+inline constexpr std::size_t kMaxConfigMessage = 300;
+/// `s` if at most `max` bytes, else its start and how many bytes were left out.
+std::string cut_for_message(std::string_view s, std::size_t max);
+
 /// A problem found while loading: where, which key, what.
 struct ConfigError {
   std::string file;
