@@ -4,9 +4,11 @@
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
@@ -23,8 +25,23 @@ namespace {
 class ShmOwner {
  public:
   explicit ShmOwner(const std::string& name) {
-    fd_ = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+    // Created exclusively when it does not exist; an existing one (left by a crash) is reused
+    // only if it is ours and private: another user could have created it to read our poses.
+    fd_ = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd_ < 0 && errno == EEXIST) fd_ = ::shm_open(name.c_str(), O_RDWR | O_CLOEXEC, 0600);
     if (fd_ < 0) throw std::runtime_error("shm_open " + name + ": " + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0 || st.st_uid != ::geteuid() || (st.st_mode & 077) != 0) {
+      ::close(fd_);
+      throw std::runtime_error("shared posture " + name + " exists and is not private to us " +
+                               "(owner uid " + std::to_string(st.st_uid) + ", mode 0" +
+                               [&] {
+                                 char b[8];
+                                 std::snprintf(b, sizeof b, "%o", st.st_mode & 0777);
+                                 return std::string(b);
+                               }() +
+                               "): refused (left untouched)");
+    }
     if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
       ::close(fd_);
       throw std::runtime_error("shared posture " + name +

@@ -197,3 +197,23 @@ TEST(Instances, MocapctlRefusesAControlSocketServedByAnotherUser) {
   ::kill(pid, SIGKILL);
   ::waitpid(pid, nullptr, 0);
 }
+
+TEST(Instances, ASharedPostureCreatedByAnotherUserIsRefused) {
+  TempDir dir;
+  const std::string shm = "/mocap-test-" + std::to_string(::getpid()) + "-foreign";
+  const std::string path = "/dev/shm" + shm;
+  {  // "another user" prepared it world-readable (as root we can also give it away)
+    std::ofstream(path) << "";
+    ASSERT_EQ(::chmod(path.c_str(), 0666), 0);
+    if (::geteuid() == 0) ASSERT_EQ(::chown(path.c_str(), 65534, 65534), 0);
+  }
+  std::string out;
+  const int code = run_mocapd(dir, "foreign",
+                              config_with_posture(dir, free_tcp_port(), shm) +
+                                  line_sensor_toml("c", dir.file("none"), "pelvis"),
+                              out);
+  EXPECT_NE(code, 0) << out;
+  EXPECT_NE(out.find("is not private to us"), std::string::npos) << out;
+  EXPECT_TRUE(fs::exists(path));  // left untouched
+  fs::remove(path);
+}
