@@ -2,6 +2,7 @@
 // (t,segment,w,x,y,z,px,py,pz: one row per segment per frame) or BVH (the skeleton's BvhWriter,
 // body height from the recorded configuration). Damaged ranges are skipped and reported
 // (exit status 3), a torn tail is reported; everything intact is exported.
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -51,14 +52,18 @@ bool report_tail(const SessionReader& r, const std::string& path) {
     std::snprintf(b, sizeof b, "%.3f s", static_cast<double>(t - t0) * 1e-9);
     return b;
   };
-  for (const auto& d : r.damaged())
+  for (const auto& d : r.damaged()) {
+    // Blocks of different streams interleave: show the span in time order.
+    const int64_t lo = d.t_after_ns < 0 ? d.t_before_ns : std::min(d.t_before_ns, d.t_after_ns);
+    const int64_t hi = d.t_after_ns < 0 ? -1 : std::max(d.t_before_ns, d.t_after_ns);
     std::fprintf(stderr,
                  "mocap export: %s: damaged bytes %llu-%llu (%llu bytes, between %s and %s of "
                  "the recording) skipped: %s\n",
                  path.c_str(), static_cast<unsigned long long>(d.begin),
                  static_cast<unsigned long long>(d.end),
-                 static_cast<unsigned long long>(d.end - d.begin), secs(d.t_before_ns).c_str(),
-                 d.t_after_ns < 0 ? "the end" : secs(d.t_after_ns).c_str(), d.reason.c_str());
+                 static_cast<unsigned long long>(d.end - d.begin), secs(lo).c_str(),
+                 hi < 0 ? "the end" : secs(hi).c_str(), d.reason.c_str());
+  }
   if (r.end() != End::clean && r.ignored_bytes() > 0 && r.damaged().empty())
     std::fprintf(stderr,
                  "mocap export: %s: %s; the last %llu bytes (an unfinished write) were "
