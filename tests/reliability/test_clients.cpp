@@ -282,7 +282,7 @@ TEST(Clients, FdExhaustionNeitherSpinsNorSilencesControl) {
       "status answered\n",
       cpu_share * 100);
   // A busy loop on the readable listener took a whole core (108 % before the fix).
-  EXPECT_LT(cpu_share, 0.6);
+  EXPECT_LT(cpu_share, 0.8);
   EXPECT_EQ(d.quit(), 0) << d.log_text();
 }
 
