@@ -2,6 +2,7 @@
 // file:line:column errors, unknown keys rejected with the nearest valid name, --set overrides,
 // and the effective configuration printed back as TOML.
 #include "mocap/daemon/config.hpp"
+#include "mocap/core/runtime_dir.hpp"
 #include "mocap/core/text_check.hpp"
 
 #include <arpa/inet.h>
@@ -10,6 +11,7 @@
 #include <toml++/toml.h>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -21,12 +23,20 @@
 
 namespace mocap::daemon {
 
+std::string cut_for_message(std::string_view s, size_t max) {
+  if (s.size() <= max) return std::string(s);
+  // The start and the end (where a message names what was expected), the middle left out.
+  const size_t head = max / 2, tail = max / 4;
+  return std::string(s.substr(0, head)) + "... (" + std::to_string(s.size() - head - tail) +
+         " more bytes not shown) ..." + std::string(s.substr(s.size() - tail));
+}
+
 std::string ConfigError::to_string() const {
-  std::string out = file.empty() ? std::string("<config>") : file;
+  std::string out = file.empty() ? std::string("<config>") : cut_for_message(file, 256);
   if (line > 0) out += ":" + std::to_string(line) + ":" + std::to_string(column);
   out += ": ";
-  if (!key.empty()) out += key + ": ";
-  return out + message;
+  if (!key.empty()) out += cut_for_message(key, kMaxConfigMessageKey) + ": ";
+  return out + cut_for_message(message, kMaxConfigMessage);
 }
 
 std::string ConfigErrors::to_string() const {
@@ -74,14 +84,18 @@ LogLevel log_level_of(std::string_view name) {
 }
 
 std::string default_control_socket() {
-  if (const char* dir = std::getenv("XDG_RUNTIME_DIR"); dir && *dir)
-    return std::string(dir) + "/mocapd.sock";
-  return "/tmp/mocapd-" + std::to_string(getuid()) + ".sock";
+  std::string error;
+  const std::string dir = private_runtime_dir(&error);
+  if (dir.empty()) throw std::runtime_error(error);
+  return dir + "/mocapd.sock";
 }
 
 namespace {
 
 constexpr std::string_view kLogLevels[] = {"trace", "debug", "info", "warn", "error", "off"};
+
+/// Thrown by Ctx::add past kMaxConfigErrors (not a std::exception: nothing else catches it).
+struct TooManyConfigErrors {};
 
 struct Ctx {
   std::string source;  // file name for nodes without a source
@@ -89,10 +103,18 @@ struct Ctx {
   const ConfigValidators* validators = nullptr;
 
   void add(const toml::node* n, const std::string& key, std::string msg) {
+    if (errors.errors.size() >= kMaxConfigErrors) {
+      ConfigError stop;
+      stop.file = source;
+      stop.message = "more than " + std::to_string(kMaxConfigErrors) +
+                     " problems: stopped checking (fix these first)";
+      errors.errors.push_back(std::move(stop));
+      throw TooManyConfigErrors{};
+    }
     ConfigError e;
     e.file = source;
-    e.key = key;
-    e.message = std::move(msg);
+    e.key = cut_for_message(key, kMaxConfigMessageKey);  // long keys and values: cut, not echoed
+    e.message = cut_for_message(msg, kMaxConfigMessage);
     if (n) {
       const auto& src = n->source();
       if (src.path && !src.path->empty()) e.file = *src.path;
@@ -726,6 +748,12 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
                                    const ConfigValidators* validators) {
   Ctx ctx{std::string(source_name), errors, validators};
   toml::table root;
+  if (toml_text.size() > kMaxConfigBytes) {
+    errors.errors.push_back({std::string(source_name), 0, 0, "",
+                             "configuration is " + std::to_string(toml_text.size()) +
+                                 " bytes, over the 1 MiB limit; not read"});
+    return std::nullopt;
+  }
   if (const auto bad = text_problem(toml_text, /*ascii_only=*/true)) {
     ConfigError err;
     err.file = std::string(source_name);
@@ -746,26 +774,42 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
     errors.errors.push_back(std::move(err));
     return std::nullopt;
   }
-  for (const auto& kv : overrides)
-    apply_override(root, kv, ctx);
-  if (!errors.errors.empty()) return std::nullopt;
-  Config c = read_root(root, ctx);
-  c.source = std::string(source_name);
-  if (!errors.errors.empty()) return std::nullopt;
-  return c;
+  try {
+    for (const auto& kv : overrides)
+      apply_override(root, kv, ctx);
+    if (!errors.errors.empty()) return std::nullopt;
+    Config c = read_root(root, ctx);
+    c.source = std::string(source_name);
+    if (!errors.errors.empty()) return std::nullopt;
+    return c;
+  } catch (const TooManyConfigErrors&) {
+    return std::nullopt;
+  }
 }
 
 std::optional<Config> load_config(const std::string& path,
                                   const std::vector<std::string>& overrides, ConfigErrors& errors,
                                   const ConfigValidators* validators) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    errors.errors.push_back({path, 0, 0, "", "is a directory, not a configuration file"});
+    return std::nullopt;
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     errors.errors.push_back({path, 0, 0, "", "cannot open the file"});
     return std::nullopt;
   }
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_config(ss.str(), path, overrides, errors, validators);
+  // Read at most one byte past the limit: a huge file is refused without reading it all.
+  std::string text(kMaxConfigBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<size_t>(in.gcount()));
+  if (text.size() > kMaxConfigBytes) {
+    errors.errors.push_back(
+        {path, 0, 0, "", "larger than 1 MiB, the limit for a configuration file; not read"});
+    return std::nullopt;
+  }
+  return parse_config(text, path, overrides, errors, validators);
 }
 
 namespace {

@@ -71,12 +71,13 @@ std::optional<ControlRequest> parse_control_request(std::string_view line, std::
   if (cmd == "record") {
     const std::string_view what = next_word(rest);
     if (what == "stop") return no_args(ControlCommand::record_stop);
-    if (what == "start" && !rest.empty()) {
+    if (what == "start") {
       r.command = ControlCommand::record_start;
-      r.argument = std::string(rest);  // the rest of the line: file names may contain spaces
+      r.argument = std::string(rest);  // the rest of the line: file names may contain spaces;
+                                       // none: the daemon picks a fresh take name
       return r;
     }
-    error = "usage: record start FILE | record stop";
+    error = "usage: record start [NAME] | record stop";
     return std::nullopt;
   }
   error = "unknown command '" + std::string(cmd.substr(0, 64)) +
@@ -93,7 +94,7 @@ std::string format_control_request(const ControlRequest& r) {
     case ControlCommand::reset_heading:
       return "reset-heading\n";
     case ControlCommand::record_start:
-      return "record start " + r.argument + "\n";
+      return r.argument.empty() ? "record start\n" : "record start " + r.argument + "\n";
     case ControlCommand::record_stop:
       return "record stop\n";
     case ControlCommand::quit:

@@ -1,6 +1,6 @@
 // The control socket's server thread and client call: AF_UNIX stream socket, mode 0600, one
-// bounded request line per connection, per-connection timeouts so a stuck client cannot block
-// the daemon.
+// bounded request line per connection; connections served independently (non-blocking, one
+// poll loop, per-connection buffers and deadlines) so a silent client delays nobody.
 #include <fcntl.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -8,6 +8,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -85,53 +86,149 @@ ControlServer::~ControlServer() {
   stopping_ = true;
   stop_.notify();
   if (thread_.joinable()) thread_.join();
+  for (auto& c : conns_)
+    ::close(c.fd);
+  conns_.clear();
+  if (reserve_fd_ >= 0) ::close(reserve_fd_);
   ::close(listen_fd_);
   ::unlink(path_.c_str());
 }
 
+namespace {
+constexpr int64_t kRequestTimeoutNs = 2'000'000'000;
+constexpr int64_t kAcceptPauseNs = 100'000'000;
+}  // namespace
+
 void ControlServer::run() {
+  reserve_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  std::vector<pollfd> fds;
+  fds.reserve(kMaxControlConnections + 2);
+  int64_t last_exhausted_log = 0;
   while (!stopping_) {
-    pollfd fds[2] = {{listen_fd_, POLLIN, 0}, {stop_.fd(), POLLIN, 0}};
-    const int n = ::poll(fds, 2, 1000);
+    int64_t now = monotonic_ns();
+    const bool accepting = now >= accept_paused_until_;
+    fds.clear();
+    fds.push_back({stop_.fd(), POLLIN, 0});
+    fds.push_back({accepting ? listen_fd_ : -1, POLLIN, 0});
+    int64_t wake = now + 1'000'000'000;
+    if (!accepting) wake = std::min(wake, accept_paused_until_);
+    for (const auto& c : conns_) {
+      fds.push_back({c.fd, static_cast<short>(c.replying ? POLLOUT : POLLIN), 0});
+      wake = std::min(wake, c.deadline_ns);
+    }
+    const int timeout_ms =
+        static_cast<int>(std::max<int64_t>(0, (wake - now + 999'999) / 1'000'000));
+    const int n = ::poll(fds.data(), fds.size(), timeout_ms);
     if (n < 0 && errno != EINTR) {
       log_.error("control poll: %s", std::strerror(errno));
       return;
     }
     if (stopping_) break;
-    if (n <= 0 || !(fds[0].revents & POLLIN)) continue;
-    const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
-    if (fd < 0) continue;
-    serve_one(fd);
-    ::close(fd);
+    now = monotonic_ns();
+    // Connections first, backwards: closing swaps the last one into the freed place.
+    for (std::size_t i = conns_.size(); i > 0; --i) {
+      Conn& c = conns_[i - 1];
+      const short re = n > 0 ? fds[i + 1].revents : 0;
+      bool keep = true;
+      if (re) {
+        if (c.replying)
+          keep = (re & (POLLERR | POLLHUP | POLLNVAL)) ? false : send_reply(c);
+        else
+          keep = on_input(c, re);
+      }
+      if (keep && now >= c.deadline_ns) {
+        if (!c.replying) {
+          answer(c, false, false);  // "incomplete request", best effort
+          send_reply(c);
+        }
+        keep = false;
+      }
+      if (!keep) close_conn(i - 1);
+    }
+    if (accepting && n > 0 && (fds[1].revents & POLLIN)) accept_connections(now);
+    if (accept_paused_until_ > now && now - last_exhausted_log > 10'000'000'000) {
+      last_exhausted_log = now;
+      log_.warn("control socket: out of file descriptors; accepting paused briefly");
+    }
   }
 }
 
-void ControlServer::serve_one(int fd) {
-  // Read one line (bounded) within 2 s; then reply and close.
-  std::string buf;
-  buf.reserve(256);
-  const int64_t deadline = monotonic_ns() + s_to_ns(2.0);
-  bool complete = false, too_long = false;
+void ControlServer::accept_connections(int64_t now) {
+  for (int k = 0; k < 16; ++k) {
+    const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+    if (fd < 0) {
+      if (errno == EMFILE || errno == ENFILE) {
+        if (reserve_fd_ >= 0) {  // give up the reserve: the next accept takes its place
+          ::close(reserve_fd_);
+          reserve_fd_ = -1;
+          continue;
+        }
+        accept_paused_until_ = now + kAcceptPauseNs;  // never a busy loop on a full table
+      } else if (errno == ECONNABORTED || errno == EINTR) {
+        continue;
+      }
+      return;
+    }
+    if (conns_.size() >= kMaxControlConnections) {
+      // Full: the oldest connection still waiting for its request makes room.
+      std::size_t oldest = conns_.size();
+      for (std::size_t i = 0; i < conns_.size(); ++i)
+        if (!conns_[i].replying &&
+            (oldest == conns_.size() || conns_[i].accepted_ns < conns_[oldest].accepted_ns))
+          oldest = i;
+      if (oldest == conns_.size()) {
+        ::close(fd);
+        continue;
+      }
+      close_conn(oldest);
+    }
+    Conn c;
+    c.fd = fd;
+    c.accepted_ns = now;
+    c.deadline_ns = now + kRequestTimeoutNs;
+    conns_.push_back(std::move(c));
+  }
+}
+
+bool ControlServer::on_input(Conn& c, short revents) {
   char chunk[512];
-  while (!complete && !too_long) {
-    const int64_t left_ms = (deadline - monotonic_ns()) / 1000000;
-    if (left_ms <= 0) break;
-    pollfd p{fd, POLLIN, 0};
-    if (::poll(&p, 1, static_cast<int>(left_ms)) <= 0) break;
-    const ssize_t n = ::recv(fd, chunk, sizeof chunk, 0);
-    if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+  bool eof = false;
+  for (;;) {
+    const ssize_t n = ::recv(c.fd, chunk, sizeof chunk, 0);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) break;
     if (n <= 0) {
-      complete = !buf.empty();  // EOF ends the request too
+      eof = true;
       break;
     }
-    for (ssize_t i = 0; i < n && !complete; ++i) {
-      if (chunk[i] == '\n')
-        complete = true;
-      else
-        buf.push_back(chunk[i]);
+    for (ssize_t i = 0; i < n; ++i) {
+      if (chunk[i] == '\n') {
+        answer(c, true, false);
+        return c.replying ? send_reply(c) : false;
+      }
+      c.in.push_back(chunk[i]);
     }
-    if (buf.size() > kMaxControlRequest) too_long = true;
+    if (c.in.size() > kMaxControlRequest) {
+      answer(c, false, true);
+      return send_reply(c);
+    }
   }
+  if (eof || (revents & (POLLERR | POLLHUP | POLLNVAL))) {
+    if (revents & (POLLERR | POLLNVAL)) return false;
+    // EOF ends the request too (a client that shut down its sending side and waits); answer()
+    // drops it if the client has hung up entirely.
+    if (!c.in.empty()) {
+      answer(c, true, false);
+      return c.replying && send_reply(c);
+    }
+    if (revents & POLLHUP) return false;
+    answer(c, false, false);
+    return send_reply(c);
+  }
+  return true;
+}
+
+void ControlServer::answer(Conn& c, bool complete, bool too_long) {
   std::string reply;
   std::string error;
   if (too_long) {
@@ -139,7 +236,15 @@ void ControlServer::serve_one(int fd) {
                                 " bytes)");
   } else if (!complete) {
     reply = control_error_reply("incomplete request (expected one line ending in newline)");
-  } else if (auto req = parse_control_request(buf, error)) {
+  } else if (auto req = parse_control_request(c.in, error)) {
+    // A client that hung up (timed out and closed) does not get its command run later.
+    pollfd p{c.fd, POLLOUT, 0};
+    if (::poll(&p, 1, 0) > 0 && (p.revents & (POLLHUP | POLLERR))) {
+      ++abandoned_;
+      log_.warn("control request '%.64s' dropped: the client hung up before it ran", c.in.c_str());
+      c.replying = false;
+      return;
+    }
     try {
       reply = handler_(*req);
     } catch (const std::exception& e) {
@@ -151,11 +256,29 @@ void ControlServer::serve_one(int fd) {
   if (reply.rfind("{\"ok\":false", 0) == 0)
     log_.warn("control request rejected: %s", reply.c_str());
   ++served_;
-  // Best effort: the client may have gone away. Make the socket blocking with a send timeout.
-  ::fcntl(fd, F_SETFL, 0);
-  timeval tv{1, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
-  write_all(fd, reply + "\n");
+  c.out = reply + "\n";
+  c.out_pos = 0;
+  c.replying = true;
+  c.deadline_ns = monotonic_ns() + kRequestTimeoutNs;
+}
+
+bool ControlServer::send_reply(Conn& c) {
+  while (c.out_pos < c.out.size()) {
+    const ssize_t n = ::send(c.fd, c.out.data() + c.out_pos, c.out.size() - c.out_pos,
+                             MSG_NOSIGNAL | MSG_DONTWAIT);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return true;
+    if (n <= 0) return false;
+    c.out_pos += static_cast<std::size_t>(n);
+  }
+  return false;  // all sent: close
+}
+
+void ControlServer::close_conn(std::size_t i) {
+  ::close(conns_[i].fd);
+  if (i + 1 != conns_.size()) conns_[i] = std::move(conns_.back());
+  conns_.pop_back();
+  if (reserve_fd_ < 0) reserve_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
 }
 
 std::string control_call(const std::string& path, std::string_view request_line, int timeout_ms) {
@@ -163,6 +286,18 @@ std::string control_call(const std::string& path, std::string_view request_line,
   if (fd < 0)
     throw std::runtime_error("cannot reach mocapd at " + path + ": " + std::strerror(errno) +
                              " (is it running?)");
+  // Only a daemon of our own user (or root) gets our commands and is believed: another user
+  // may have created the socket first.
+  ucred cred{};
+  socklen_t cred_len = sizeof cred;
+  if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &cred_len) != 0 ||
+      (cred.uid != ::geteuid() && cred.uid != 0)) {
+    ::close(fd);
+    throw std::runtime_error("refusing " + path + ": it is served by uid " +
+                             std::to_string(cred.uid) + " (pid " + std::to_string(cred.pid) +
+                             "), not by us (uid " + std::to_string(::geteuid()) +
+                             "); another user's process, not our mocapd");
+  }
   std::string line(request_line);
   if (line.empty() || line.back() != '\n') line += '\n';
   if (!write_all(fd, line)) {

@@ -84,7 +84,8 @@ void Daemon::start() {
       control_path_, [this](const ControlRequest& r) { return handle(r); },
       log_.child("control", log_.level()));
   if (!cfg_.recording.auto_start.empty()) {
-    ControlRequest r{ControlCommand::record_start, cfg_.recording.auto_start};
+    // A fresh name at every start (name-2.ext, ...): a restart never truncates a take.
+    ControlRequest r{ControlCommand::record_start, cfg_.recording.auto_start, true};
     const std::string reply = handle(r);
     if (reply.find("\"ok\":false") != std::string::npos)
       throw std::runtime_error("recording.auto_start: " + reply);
@@ -161,12 +162,10 @@ std::string Daemon::handle(const ControlRequest& r) {
       std::lock_guard lock(rec_mu_);
       if (!recording_path_.empty())
         return control_error_reply("already recording to " + recording_path_);
-      std::filesystem::path p(r.argument);
-      if (p.is_relative()) p = std::filesystem::path(cfg_.recording.directory) / p;
-      RecordTap* tap = parts_.recorder->start(p.string());
+      RecordTap* tap = parts_.recorder->start(r.argument, r.unique);
       pipeline_->set_record_tap(tap);
       pipeline_->set_frame_flag(kFrameRecording, true);
-      recording_path_ = p.string();
+      recording_path_ = parts_.recorder->path();
       log_.info("recording to %s", recording_path_.c_str());
       ok["file"] = recording_path_;
       return ok.dump();
@@ -175,9 +174,23 @@ std::string Daemon::handle(const ControlRequest& r) {
       std::lock_guard lock(rec_mu_);
       if (recording_path_.empty() || !parts_.recorder) return control_error_reply("not recording");
       pipeline_->set_record_tap(nullptr);
-      parts_.recorder->stop();
+      const RecordingSummary sum = parts_.recorder->stop();
       pipeline_->set_frame_flag(kFrameRecording, false);
       ok["file"] = recording_path_;
+      ok["duration_s"] = std::round(sum.duration_s * 1000) / 1000;
+      ok["frames"] = sum.frames;
+      ok["samples"] = sum.samples;
+      ok["raw_blocks"] = sum.raw_blocks;
+      ok["drops"] = sum.drops;
+      ok["bytes"] = sum.bytes;
+      if (!sum.error.empty()) ok["error"] = sum.error;
+      char msg[160];
+      std::snprintf(
+          msg, sizeof msg,
+          "recorded %.1f s: %llu frames, %llu samples, %llu dropped, %llu bytes in", sum.duration_s,
+          static_cast<unsigned long long>(sum.frames), static_cast<unsigned long long>(sum.samples),
+          static_cast<unsigned long long>(sum.drops), static_cast<unsigned long long>(sum.bytes));
+      ok["message"] = msg;
       log_.info("recording %s closed", recording_path_.c_str());
       recording_path_.clear();
       return ok.dump();

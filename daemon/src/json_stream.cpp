@@ -5,17 +5,21 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <linux/sockios.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <vector>
 
 #include "mocap/core/thread_priority.hpp"
+#include "mocap/core/time.hpp"
 
 namespace mocap::daemon {
 
@@ -26,6 +30,7 @@ struct PoseJsonServer::Client {
   std::size_t read_pos = 0;
   std::size_t used = 0;
   std::size_t input_bytes = 0;
+  int64_t stalled_since_ns = 0;  // first time its queue could not be sent on (0: keeping up)
 
   std::size_t free_bytes() const { return ring.size() - used; }
   void push(const char* data, std::size_t len) {
@@ -112,6 +117,7 @@ PoseJsonServer::Stats PoseJsonServer::stats() const {
   s.clients_accepted = counters_.accepted.load();
   s.clients_rejected = counters_.rejected.load();
   s.clients_dropped = counters_.abusive.load();
+  s.clients_evicted = counters_.evicted.load();
   s.bytes_sent = counters_.bytes_sent.load();
   return s;
 }
@@ -126,6 +132,8 @@ void PoseJsonServer::stop() {
     remove_client(i - 1);
   if (listen_fd_ >= 0) ::close(listen_fd_);
   listen_fd_ = -1;
+  if (reserve_fd_ >= 0) ::close(reserve_fd_);
+  reserve_fd_ = -1;
 }
 
 void PoseJsonServer::remove_client(std::size_t i) {
@@ -138,11 +146,55 @@ void PoseJsonServer::remove_client(std::size_t i) {
 void PoseJsonServer::accept_clients() {
   for (;;) {
     const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
-    if (fd < 0) return;  // EAGAIN, or a transient error: poll again
+    if (fd < 0) {
+      if (errno == EMFILE || errno == ENFILE) {
+        // Out of fds: the pending connection would keep the listener readable forever. Give up
+        // the reserve fd to take it and close it, take the reserve back, and pause accepting.
+        if (reserve_fd_ >= 0) {
+          ::close(reserve_fd_);
+          const int shed = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+          if (shed >= 0) {
+            ::close(shed);
+            counters_.rejected.fetch_add(1);
+          }
+          reserve_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+        }
+        accept_paused_until_ = monotonic_ns() + 100'000'000;
+      }
+      return;  // EAGAIN, or a transient error: poll again
+    }
     if (client_count_ >= static_cast<std::size_t>(options_.max_clients)) {
-      ::close(fd);
-      counters_.rejected.fetch_add(1);
-      continue;
+      // Full: a client that does not read makes room: the one stalled longest (its kernel
+      // buffer full for at least 0.5 s), else the one with the most unsent bytes if that is
+      // at least 128 KiB (a reading client has next to none).
+      const int64_t now = monotonic_ns();
+      std::size_t victim = client_count_;
+      for (std::size_t i = 0; i < client_count_; ++i) {
+        const Client& c = *clients_[i];
+        if (c.stalled_since_ns == 0 || now - c.stalled_since_ns < 500'000'000) continue;
+        if (victim == client_count_ || c.stalled_since_ns < clients_[victim]->stalled_since_ns)
+          victim = i;
+      }
+      if (victim == client_count_) {
+        std::size_t most = 128 * 1024;
+        for (std::size_t i = 0; i < client_count_; ++i) {
+          int unsent = 0;
+          if (::ioctl(clients_[i]->fd, SIOCOUTQ, &unsent) != 0) unsent = 0;
+          const std::size_t backlog =
+              static_cast<std::size_t>(std::max(unsent, 0)) + clients_[i]->used;
+          if (backlog >= most) {
+            most = backlog;
+            victim = i;
+          }
+        }
+      }
+      if (victim == client_count_) {
+        ::close(fd);
+        counters_.rejected.fetch_add(1);
+        continue;
+      }
+      remove_client(victim);
+      counters_.evicted.fetch_add(1);
     }
     int one = 1;
     ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
@@ -172,7 +224,10 @@ bool PoseJsonServer::flush(Client& c) {
     const std::size_t first = std::min(c.used, c.ring.size() - c.read_pos);
     const ssize_t n = ::send(c.fd, c.ring.data() + c.read_pos, first, MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n < 0) {
-      if (errno == EAGAIN || errno == EWOULDBLOCK) return true;
+      if (errno == EAGAIN || errno == EWOULDBLOCK) {
+        if (c.stalled_since_ns == 0) c.stalled_since_ns = monotonic_ns();
+        return true;
+      }
       if (errno == EINTR) continue;
       return false;  // EPIPE, ECONNRESET: the client is gone
     }
@@ -180,6 +235,7 @@ bool PoseJsonServer::flush(Client& c) {
     c.used -= static_cast<std::size_t>(n);
     counters_.bytes_sent.fetch_add(static_cast<uint64_t>(n), std::memory_order_relaxed);
   }
+  c.stalled_since_ns = 0;  // everything sent: keeping up
   return true;
 }
 
@@ -188,15 +244,18 @@ void PoseJsonServer::run() {
   (void)set_this_thread_realtime(options_.realtime_priority, nullptr);
   const std::size_t max_fds = static_cast<std::size_t>(options_.max_clients) + 2;
   std::vector<pollfd> fds(max_fds);  // allocated once for the thread's life
+  reserve_fd_ = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
   while (!stop_.load()) {
+    const int64_t pause_ns = accept_paused_until_ - monotonic_ns();
     fds[0] = {wakeup_.fd(), POLLIN, 0};
-    fds[1] = {listen_fd_, POLLIN, 0};
+    fds[1] = {pause_ns > 0 ? -1 : listen_fd_, POLLIN, 0};
     for (std::size_t i = 0; i < client_count_; ++i) {
       const Client& c = *clients_[i];
       fds[i + 2] = {c.fd, static_cast<short>(POLLIN | (c.used ? POLLOUT : 0)), 0};
     }
     const std::size_t nfds = client_count_ + 2;
-    const int r = ::poll(fds.data(), nfds, 500);
+    const int r =
+        ::poll(fds.data(), nfds, pause_ns > 0 ? static_cast<int>(pause_ns / 1'000'000 + 1) : 500);
     if (r < 0 && errno != EINTR) break;
     if (stop_.load()) break;
 
@@ -226,7 +285,7 @@ void PoseJsonServer::run() {
       if (keep && (re & POLLOUT)) keep = flush(c);
       if (!keep) remove_client(ci);
     }
-    if (fds[1].revents & POLLIN) accept_clients();
+    if (fds[1].fd >= 0 && (fds[1].revents & POLLIN)) accept_clients();
     if (fds[0].revents & POLLIN) wakeup_.wait(0);
 
     uint64_t tail = tail_.load(std::memory_order_relaxed);

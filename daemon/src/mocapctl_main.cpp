@@ -1,8 +1,7 @@
 // mocapctl: control client for a running mocapd (talks over its Unix-domain control socket).
-//   mocapctl status [--json] | calibrate npose|tpose | reset-heading | record start FILE |
+//   mocapctl status [--json] | calibrate npose|tpose | reset-heading | record start [NAME] |
 //            record stop | quit          [--socket PATH]
 #include <cstdio>
-#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -18,8 +17,11 @@ const char* kUsage =
     "  status [--json]          sensors, rates, drops, filter and calibration state\n"
     "  calibrate npose|tpose    start a calibration (countdown, then hold the pose)\n"
     "  reset-heading            re-align the heading (stand upright facing forward)\n"
-    "  record start FILE        record a session (relative paths go to recording.directory)\n"
-    "  record stop              close the recording\n"
+    "  record start [NAME]      record a session into a new file NAME inside the daemon's\n"
+    "                           recording.directory (never overwritten: an existing file is an\n"
+    "                           error); no NAME: a fresh take-YYYYMMDD-HHMMSS.mcap\n"
+    "  record stop              close the recording; prints duration, frames, samples, drops,\n"
+    "                           bytes\n"
     "  quit                     stop the daemon\n"
     "options:\n";
 
@@ -83,20 +85,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "mocapctl: %s\n%s", err.c_str(), kUsage);
     return 2;
   }
-  if (req->command == mocap::daemon::ControlCommand::record_start) {
-    // Relative paths are resolved by the daemon against recording.directory; make paths that
-    // name a directory explicitly (./x) absolute here, where the user's cwd is known.
-    if (req->argument.rfind("./", 0) == 0 || req->argument.rfind("../", 0) == 0)
-      req->argument = std::filesystem::absolute(req->argument).lexically_normal().string();
-  }
   long timeout = 5000;
   if (!args.get_int("timeout-ms", timeout)) {
     std::fprintf(stderr, "mocapctl: %s\n", args.error().c_str());
     return 2;
   }
-  const std::string path = args.get_or("socket", mocap::daemon::default_control_socket());
   std::string reply;
   try {
+    const std::string path =
+        args.has("socket") ? *args.get("socket") : mocap::daemon::default_control_socket();
     reply = mocap::daemon::control_call(path, mocap::daemon::format_control_request(*req),
                                         static_cast<int>(timeout));
   } catch (const std::exception& e) {

@@ -6,12 +6,14 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include "mocap/core/cli_args.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/daemon_setup.hpp"
+#include "mocap/daemon/instance_lock.hpp"
 
 using namespace mocap;
 using namespace mocap::daemon;
@@ -112,6 +114,21 @@ int main(int argc, char** argv) {
       return 2;
     }
     return run_replay_daemon(*replay, speed, args.has("config") ? &*cfg : nullptr, sfd, log);
+  }
+
+  // One instance per runtime directory: the lock comes before any device, port or shared
+  // memory is touched, so a second mocapd changes nothing.
+  std::unique_ptr<InstanceLock> instance;
+  try {
+    const std::string sock =
+        cfg->daemon.control_socket.empty() ? default_control_socket() : cfg->daemon.control_socket;
+    const auto slash = sock.find_last_of('/');
+    instance = std::make_unique<InstanceLock>(slash == std::string::npos ? std::string(".")
+                                              : slash == 0               ? std::string("/")
+                                                                         : sock.substr(0, slash));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mocapd: %s\n", e.what());
+    return 1;
   }
 
   try {

@@ -4,6 +4,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -306,6 +307,22 @@ void encode_block_header(BlockType type, uint32_t payload_len, uint8_t* out) noe
   w.u8(static_cast<uint8_t>(type));
   w.u8(0);
   w.u32(payload_len);
+}
+
+void encode_header_copy_blocks(std::span<const uint8_t> file_header, std::vector<uint8_t>& out) {
+  for (std::size_t off = 0; off < file_header.size(); off += kHeaderCopyChunk) {
+    const std::size_t n = std::min(kHeaderCopyChunk, file_header.size() - off);
+    const std::size_t start = out.size();
+    out.resize(start + kBlockHeaderBytes + kHeaderCopyPrefixBytes + n + kBlockTrailerBytes);
+    uint8_t* p = out.data() + start;
+    encode_block_header(BlockType::header_copy, static_cast<uint32_t>(kHeaderCopyPrefixBytes + n),
+                        p);
+    put_u32(p + kBlockHeaderBytes, static_cast<uint32_t>(file_header.size()));
+    put_u32(p + kBlockHeaderBytes + 4, static_cast<uint32_t>(off));
+    std::memcpy(p + kBlockHeaderBytes + kHeaderCopyPrefixBytes, file_header.data() + off, n);
+    const std::size_t body = kBlockHeaderBytes + kHeaderCopyPrefixBytes + n;
+    put_u32(p + body, static_cast<uint32_t>(crc32(0L, p, static_cast<uInt>(body))));
+  }
 }
 
 }  // namespace mocap::session

@@ -1,5 +1,7 @@
-// SessionReader: header validation (magic, byte order, version, limits, CRC) and block
-// iteration that stops at the first torn or corrupt block, classifying and locating it.
+// SessionReader: header validation (magic, byte order, version, limits, CRC) with recovery
+// from the header_copy blocks, and block iteration that skips damage by resynchronising on the
+// next valid block (sync marker, length, CRC, decodes), recording each damaged range; a torn
+// tail ends reading.
 #include "mocap/session/session_reader.hpp"
 
 #include <sys/stat.h>
@@ -8,10 +10,85 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <functional>
+#include <limits>
 
 namespace mocap {
 
 using namespace session;
+
+namespace {
+
+constexpr uint64_t kNone = std::numeric_limits<uint64_t>::max();
+constexpr std::size_t kFixedHeaderBytes = 20;
+
+/// Checks and decodes a file header read through `read(offset, dst, n)` from a stream of `size`
+/// bytes; `header_bytes` is its length (magic to CRC). False with a message.
+bool parse_file_header(const std::function<std::size_t(uint64_t, uint8_t*, std::size_t)>& read,
+                       uint64_t size, SessionHeader& header, uint64_t& header_bytes,
+                       std::string& msg) {
+  uint8_t fixed[kFixedHeaderBytes];
+  const std::size_t got = read(0, fixed, sizeof fixed);
+  if (got < sizeof kMagic || std::memcmp(fixed, kMagic, sizeof kMagic) != 0) {
+    msg = "not a mocap session file (no MOCAPSES signature)";
+    return false;
+  }
+  if (got < sizeof fixed) {
+    msg = "session header truncated";
+    return false;
+  }
+  const uint32_t version = get_u32(fixed + 8);
+  const uint32_t endian = get_u32(fixed + 12);
+  if (endian != kEndianTag) {
+    char b[16];
+    std::snprintf(b, sizeof b, "%08x", endian);
+    msg = "unknown byte-order tag 0x" + std::string(b) + " (expected little-endian 0x01020304)";
+    return false;
+  }
+  if (version != kVersion) {
+    msg = "session format version " + std::to_string(version) +
+          " is not supported (this build reads version " + std::to_string(kVersion) + ")";
+    return false;
+  }
+  const uint32_t len = get_u32(fixed + 16);
+  if (len > kMaxHeaderBytes) {
+    msg = "header length " + std::to_string(len) + " exceeds the 4 MiB limit";
+    return false;
+  }
+  if (len + 24ull > size) {
+    msg = "session header truncated";
+    return false;
+  }
+  std::vector<uint8_t> buf(sizeof fixed + len + 4);
+  std::memcpy(buf.data(), fixed, sizeof fixed);
+  if (read(sizeof fixed, buf.data() + sizeof fixed, len + 4) != len + 4) {
+    msg = "session header truncated";
+    return false;
+  }
+  const auto crc = crc32(0L, buf.data(), static_cast<uInt>(buf.size() - 4));
+  if (static_cast<uint32_t>(crc) != get_u32(buf.data() + buf.size() - 4)) {
+    msg = "session header checksum mismatch (file damaged)";
+    return false;
+  }
+  if (!decode_header_payload({buf.data() + sizeof fixed, len}, header, &msg)) return false;
+  header_bytes = buf.size();
+  return true;
+}
+
+int64_t block_time(const SessionReader::Block& b) {
+  switch (b.type) {
+    case BlockType::raw:
+      return b.t_host_ns;
+    case BlockType::sample:
+      return b.sample.t_host_ns;
+    case BlockType::pose:
+      return b.pose.t_ns;
+    default:
+      return -1;
+  }
+}
+
+}  // namespace
 
 SessionReader::~SessionReader() {
   if (file_) std::fclose(file_);
@@ -19,7 +96,9 @@ SessionReader::~SessionReader() {
 
 bool SessionReader::open(const std::string& path, std::string* error) {
   if (file_) std::fclose(file_);
+  memory_.clear();
   file_ = std::fopen(path.c_str(), "rb");
+  file_pos_ = 0;
   if (!file_) {
     if (error) *error = "cannot open session file '" + path + "': " + std::strerror(errno);
     return false;
@@ -37,58 +116,112 @@ bool SessionReader::open_bytes(std::span<const uint8_t> bytes, std::string* erro
   return read_header("session data", error);
 }
 
-namespace {
-/// Reads up to n bytes at offset from the file (sequentially) or memory; returns the count.
-std::size_t read_at(std::FILE* f, const std::vector<uint8_t>& mem, uint64_t offset, uint8_t* dst,
-                    std::size_t n) {
-  if (f) return std::fread(dst, 1, n, f);
-  if (offset >= mem.size()) return 0;
-  const std::size_t got = std::min<std::size_t>(n, mem.size() - offset);
-  std::memcpy(dst, mem.data() + offset, got);
+std::size_t SessionReader::read_at(uint64_t offset, uint8_t* dst, std::size_t n) {
+  if (file_) {
+    if (offset != file_pos_) {
+      if (::fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0) return 0;
+      file_pos_ = offset;
+    }
+    const std::size_t got = std::fread(dst, 1, n, file_);
+    file_pos_ += got;
+    return got;
+  }
+  if (offset >= memory_.size()) return 0;
+  const std::size_t got = std::min<std::size_t>(n, memory_.size() - offset);
+  std::memcpy(dst, memory_.data() + offset, got);
   return got;
 }
-}  // namespace
 
 bool SessionReader::read_header(const std::string& name, std::string* error) {
-  auto fail = [&](const std::string& m) {
-    if (error) *error = name + ": " + m;
-    return false;
-  };
   offset_ = 0;
   end_ = End::not_reached;
   tail_reason_.clear();
   unknown_blocks_ = 0;
-  uint8_t fixed[20];
-  const std::size_t got = read_at(file_, memory_, 0, fixed, sizeof fixed);
-  if (got < sizeof kMagic || std::memcmp(fixed, kMagic, sizeof kMagic) != 0)
-    return fail("not a mocap session file (no MOCAPSES signature)");
-  if (got < sizeof fixed) return fail("session header truncated");
-  const uint32_t version = get_u32(fixed + 8);
-  const uint32_t endian = get_u32(fixed + 12);
-  if (endian != kEndianTag)
-    return fail("unknown byte-order tag 0x" + [&] {
-      char b[16];
-      std::snprintf(b, sizeof b, "%08x", endian);
-      return std::string(b);
-    }() + " (expected little-endian 0x01020304)");
-  if (version != kVersion)
-    return fail("session format version " + std::to_string(version) +
-                " is not supported (this build reads version " + std::to_string(kVersion) + ")");
-  const uint32_t len = get_u32(fixed + 16);
-  if (len > kMaxHeaderBytes)
-    return fail("header length " + std::to_string(len) + " exceeds the 4 MiB limit");
-  if (len + 24ull > size_) return fail("session header truncated");
-  std::vector<uint8_t> buf(sizeof fixed + len + 4);
-  std::memcpy(buf.data(), fixed, sizeof fixed);
-  if (read_at(file_, memory_, sizeof fixed, buf.data() + sizeof fixed, len + 4) != len + 4)
-    return fail("session header truncated");
-  const auto crc = crc32(0L, buf.data(), static_cast<uInt>(buf.size() - 4));
-  if (static_cast<uint32_t>(crc) != get_u32(buf.data() + buf.size() - 4))
-    return fail("session header checksum mismatch (file damaged)");
-  std::string msg;
-  if (!decode_header_payload({buf.data() + sizeof fixed, len}, header_, &msg)) return fail(msg);
-  offset_ = header_bytes_ = buf.size();
+  damaged_.clear();
+  damage_open_ = false;
+  last_t_ns_ = -1;
+  header_damage_.clear();
   payload_.resize(kMaxBlockPayload + kBlockTrailerBytes);
+  std::string msg;
+  const auto read = [this](uint64_t o, uint8_t* d, std::size_t n) { return read_at(o, d, n); };
+  if (parse_file_header(read, size_, header_, header_bytes_, msg)) {
+    offset_ = header_bytes_;
+    skip_header_copies();
+    return true;
+  }
+  // An intact header (valid CRC) of another version is that version, not damage.
+  if (msg.find("is not supported") != std::string::npos && primary_crc_ok()) {
+    if (error) *error = name + ": " + msg;
+    return false;
+  }
+  if (recover_header(&header_damage_)) {
+    header_damage_ = msg;
+    return true;
+  }
+  if (error) *error = name + ": " + msg;
+  return false;
+}
+
+bool SessionReader::primary_crc_ok() {
+  uint8_t fixed[kFixedHeaderBytes];
+  if (read_at(0, fixed, sizeof fixed) != sizeof fixed) return false;
+  const uint32_t len = get_u32(fixed + 16);
+  if (len > kMaxHeaderBytes || len + 24ull > size_) return false;
+  std::vector<uint8_t> buf(sizeof fixed + len + 4);
+  if (read_at(0, buf.data(), buf.size()) != buf.size()) return false;
+  const auto crc = crc32(0L, buf.data(), static_cast<uInt>(buf.size() - 4));
+  return static_cast<uint32_t>(crc) == get_u32(buf.data() + buf.size() - 4);
+}
+
+void SessionReader::skip_header_copies() {
+  Block b;
+  for (;;) {
+    uint64_t block_end = 0;
+    End kind = End::corrupt;
+    std::string why;
+    if (parse_at(offset_, b, block_end, kind, why) != Parse::ok || b.type != BlockType::header_copy)
+      return;
+    offset_ = block_end;
+  }
+}
+
+bool SessionReader::recover_header(std::string* /*why*/) {
+  // The copy follows the header: its first block starts within the largest header's reach.
+  Block b;
+  const uint64_t limit = kFixedHeaderBytes + kMaxHeaderBytes + 4 + 1;
+  uint64_t at = resync(0, b, limit);
+  std::vector<uint8_t> copy;
+  uint32_t total = 0;
+  while (at != kNone) {
+    uint64_t block_end = 0;
+    End kind = End::corrupt;
+    std::string w;
+    if (parse_at(at, b, block_end, kind, w) != Parse::ok || b.type != BlockType::header_copy ||
+        b.raw.size() < kHeaderCopyPrefixBytes)
+      break;
+    const uint32_t t = get_u32(b.raw.data());
+    const uint32_t off = get_u32(b.raw.data() + 4);
+    if (t > kFixedHeaderBytes + kMaxHeaderBytes + 4 || (total && t != total) || off != copy.size())
+      break;
+    total = t;
+    copy.insert(copy.end(), b.raw.begin() + kHeaderCopyPrefixBytes, b.raw.end());
+    at = block_end;
+    if (copy.size() >= total) break;
+  }
+  if (total == 0 || copy.size() != total) return false;
+  const auto read = [&copy](uint64_t o, uint8_t* d, std::size_t n) -> std::size_t {
+    if (o >= copy.size()) return 0;
+    const std::size_t got = std::min<std::size_t>(n, copy.size() - o);
+    std::memcpy(d, copy.data() + o, got);
+    return got;
+  };
+  SessionHeader h;
+  uint64_t hb = 0;
+  std::string msg;
+  if (!parse_file_header(read, copy.size(), h, hb, msg) || hb != copy.size()) return false;
+  header_ = std::move(h);
+  offset_ = header_bytes_ = at;  // the first block after the copy
+  skip_header_copies();
   return true;
 }
 
@@ -98,74 +231,162 @@ bool SessionReader::stop(End end, std::string reason) {
   return false;
 }
 
+uint64_t SessionReader::damaged_bytes() const {
+  uint64_t n = 0;
+  for (const auto& d : damaged_)
+    n += d.end - d.begin;
+  return n;
+}
+
 bool SessionReader::seek(uint64_t offset) {
   if (offset < header_bytes_ || offset > size_) return false;
-  // Files are read sequentially (read_at ignores the offset for them): move the stream too.
-  if (file_ && ::fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0) return false;
   offset_ = offset;
   end_ = End::not_reached;
   tail_reason_.clear();
+  damage_open_ = false;
+  last_t_ns_ = -1;
   return true;
+}
+
+SessionReader::Parse SessionReader::parse_at(uint64_t at, Block& block, uint64_t& block_end,
+                                             End& end_kind, std::string& why) {
+  uint8_t hdr[kBlockHeaderBytes];
+  const std::size_t got = read_at(at, hdr, sizeof hdr);
+  if (got == 0 && at >= size_) return Parse::eof;
+  end_kind = End::corrupt;
+  if (got < sizeof hdr) {
+    end_kind = End::torn;
+    why = "incomplete block header";
+    return Parse::bad;
+  }
+  if (get_u16(hdr) != kBlockSync) {
+    const bool zeros = std::all_of(hdr, hdr + sizeof hdr, [](uint8_t b) { return b == 0; });
+    end_kind = zeros ? End::torn : End::corrupt;
+    why = zeros ? "zero-filled tail" : "no block marker";
+    return Parse::bad;
+  }
+  const uint32_t len = get_u32(hdr + 4);
+  if (len > kMaxBlockPayload) {
+    why = "block length " + std::to_string(len) + " exceeds the limit";
+    return Parse::bad;
+  }
+  const std::size_t want = len + kBlockTrailerBytes;
+  const std::size_t have = read_at(at + sizeof hdr, payload_.data(), want);
+  if (have < want) {
+    end_kind = End::torn;
+    why =
+        "last block truncated (" + std::to_string(have) + " of " + std::to_string(want) + " bytes)";
+    return Parse::bad;
+  }
+  uLong crc = crc32(0L, hdr, sizeof hdr);
+  crc = crc32(crc, payload_.data(), len);
+  block_end = at + sizeof hdr + want;
+  if (static_cast<uint32_t>(crc) != get_u32(payload_.data() + len)) {
+    end_kind = block_end == size_ ? End::torn : End::corrupt;
+    why = std::string(block_end == size_ ? "last block" : "block") + " fails its checksum";
+    return Parse::bad;
+  }
+  const std::span<const uint8_t> payload(payload_.data(), len);
+  block.offset = at;
+  block.type = static_cast<BlockType>(hdr[2]);
+  bool ok = true;
+  switch (block.type) {
+    case BlockType::raw:
+      ok = len >= kRawPrefixBytes;
+      if (ok) {
+        block.device_index = get_u16(payload.data());
+        block.t_host_ns = static_cast<int64_t>(get_u64(payload.data() + 4));
+        block.raw = payload.subspan(kRawPrefixBytes);
+      }
+      break;
+    case BlockType::sample:
+      ok = decode_sample(payload, block.sample);
+      break;
+    case BlockType::pose:
+      ok = decode_pose(payload, block.pose);
+      break;
+    case BlockType::header_copy:
+      ok = len >= kHeaderCopyPrefixBytes;
+      block.raw = payload;
+      break;
+    default:
+      return Parse::skip;
+  }
+  if (!ok) {
+    why = "block does not decode (bad size or value)";
+    return Parse::bad;
+  }
+  return Parse::ok;
+}
+
+uint64_t SessionReader::resync(uint64_t from, Block& scratch, uint64_t limit) {
+  constexpr std::size_t kWindow = 64 * 1024;
+  scan_.resize(kWindow);
+  const uint8_t lo = static_cast<uint8_t>(kBlockSync & 0xff),
+                hi = static_cast<uint8_t>(kBlockSync >> 8);
+  uint64_t pos = from;
+  while (pos + 1 < size_ && pos < limit) {
+    const std::size_t n = read_at(pos, scan_.data(), kWindow);
+    if (n < 2) break;
+    for (std::size_t i = 0; i + 1 < n; ++i) {
+      if (scan_[i] != lo || scan_[i + 1] != hi) continue;
+      const uint64_t c = pos + i;
+      if (c >= limit) return kNone;
+      uint64_t block_end = 0;
+      End kind = End::corrupt;
+      std::string why;
+      const Parse p = parse_at(c, scratch, block_end, kind, why);
+      if (p == Parse::ok || p == Parse::skip) return c;
+    }
+    pos += n - 1;  // a marker split over the window's edge is seen in the next window
+  }
+  return kNone;
 }
 
 bool SessionReader::next(Block& block) {
   if (end_ != End::not_reached) return false;
   if (!file_ && memory_.empty()) return stop(End::corrupt, "no session open");
   for (;;) {
-    // Built only when reading stops: a string per block would cost an allocation per sample.
-    const auto at = [this] { return " at offset " + std::to_string(offset_); };
-    uint8_t hdr[kBlockHeaderBytes];
-    const std::size_t got = read_at(file_, memory_, offset_, hdr, sizeof hdr);
-    if (got == 0) return stop(End::clean, "");
-    if (got < sizeof hdr) return stop(End::torn, "incomplete block header" + at());
-    if (get_u16(hdr) != kBlockSync) {
-      const bool zeros = std::all_of(hdr, hdr + sizeof hdr, [](uint8_t b) { return b == 0; });
-      return stop(zeros ? End::torn : End::corrupt,
-                  (zeros ? "zero-filled tail" : "no block marker") + at());
+    uint64_t block_end = 0;
+    End kind = End::corrupt;
+    std::string why;
+    const Parse p = parse_at(offset_, block, block_end, kind, why);
+    if (p == Parse::eof) {
+      if (damaged_.empty()) return stop(End::clean, "");
+      return stop(End::corrupt, damaged_.front().reason);
     }
-    const uint32_t len = get_u32(hdr + 4);
-    if (len > kMaxBlockPayload)
-      return stop(End::corrupt,
-                  "block length " + std::to_string(len) + " exceeds the limit" + at());
-    const std::size_t want = len + kBlockTrailerBytes;
-    const std::size_t have = read_at(file_, memory_, offset_ + sizeof hdr, payload_.data(), want);
-    if (have < want)
-      return stop(End::torn, "last block truncated (" + std::to_string(have) + " of " +
-                                 std::to_string(want) + " bytes)" + at());
-    uLong crc = crc32(0L, hdr, sizeof hdr);
-    crc = crc32(crc, payload_.data(), len);
-    const uint64_t block_end = offset_ + sizeof hdr + want;
-    if (static_cast<uint32_t>(crc) != get_u32(payload_.data() + len))
-      return stop(
-          block_end == size_ ? End::torn : End::corrupt,
-          std::string(block_end == size_ ? "last block" : "block") + " fails its checksum" + at());
-    const std::span<const uint8_t> payload(payload_.data(), len);
-    block.offset = offset_;
-    block.type = static_cast<BlockType>(hdr[2]);
-    bool ok = true;
-    switch (block.type) {
-      case BlockType::raw:
-        ok = len >= kRawPrefixBytes;
-        if (ok) {
-          block.device_index = get_u16(payload.data());
-          block.t_host_ns = static_cast<int64_t>(get_u64(payload.data() + 4));
-          block.raw = payload.subspan(kRawPrefixBytes);
-        }
-        break;
-      case BlockType::sample:
-        ok = decode_sample(payload, block.sample);
-        break;
-      case BlockType::pose:
-        ok = decode_pose(payload, block.pose);
-        break;
-      default:
-        ++unknown_blocks_;
-        offset_ = block_end;
-        continue;
+    if (p == Parse::skip) {
+      ++unknown_blocks_;
+      offset_ = block_end;
+      continue;
     }
-    if (!ok) return stop(End::corrupt, "block does not decode (bad size or value)" + at());
-    offset_ = block_end;
-    return true;
+    if (p == Parse::ok) {
+      offset_ = block_end;
+      if (block.type == BlockType::header_copy) continue;
+      const int64_t t = block_time(block);
+      last_t_ns_ = t;
+      if (damage_open_) {
+        damaged_.back().t_after_ns = t;
+        damage_open_ = false;
+      }
+      return true;
+    }
+    // Damage: resume at the next valid block, or end here.
+    std::string reason = why + " at offset " + std::to_string(offset_);
+    const uint64_t resume = resync(offset_ + 1, block, size_);
+    if (resume == kNone) {
+      if (kind == End::torn) return stop(damaged_.empty() ? End::torn : End::corrupt, reason);
+      if (std::none_of(damaged_.begin(), damaged_.end(),
+                       [&](const DamagedRange& d) { return d.begin == offset_; }))
+        damaged_.push_back({offset_, size_, last_t_ns_, -1, reason});
+      return stop(End::corrupt, std::move(reason));
+    }
+    if (std::none_of(damaged_.begin(), damaged_.end(),
+                     [&](const DamagedRange& d) { return d.begin == offset_; })) {
+      damaged_.push_back({offset_, resume, last_t_ns_, -1, std::move(reason)});
+      damage_open_ = true;
+    }
+    offset_ = resume;
   }
 }
 

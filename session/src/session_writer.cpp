@@ -62,13 +62,25 @@ SessionWriter::~SessionWriter() {
 std::unique_ptr<SessionWriter> SessionWriter::create(const std::string& path,
                                                      const session::SessionHeader& header,
                                                      Options options, std::string* error) {
-  std::vector<uint8_t> bytes;
-  if (!session::encode_file_header(header, bytes, error)) return nullptr;
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) {
     if (error) *error = "cannot create session file '" + path + "': " + describe(errno);
     return nullptr;
   }
+  return create_fd(fd, path, header, std::move(options), error);
+}
+
+std::unique_ptr<SessionWriter> SessionWriter::create_fd(int fd, const std::string& path,
+                                                        const session::SessionHeader& header,
+                                                        Options options, std::string* error) {
+  std::vector<uint8_t> bytes;
+  if (!session::encode_file_header(header, bytes, error)) {
+    ::close(fd);
+    return nullptr;
+  }
+  // The header again in header_copy blocks: one damaged header byte loses nothing.
+  const std::vector<uint8_t> prefix = bytes;
+  session::encode_header_copy_blocks(prefix, bytes);
   std::size_t written = 0;
   int err = write_all(fd, bytes.data(), bytes.size(), written);
   if (!err) err = sync_fd(fd);

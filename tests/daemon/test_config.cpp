@@ -498,3 +498,23 @@ TEST(Config, VrchatOutputTrackersHeadAndHeight) {
   EXPECT_NE(all.find("outputs.vrchat.host"), std::string::npos) << all;
   EXPECT_NE(all.find("outputs.vrchat.height_m: 4 is out of range"), std::string::npos) << all;
 }
+
+TEST(ConfigLimits, SizeErrorCountAndMessageLengthAreBounded) {
+  ConfigErrors errors;
+  EXPECT_FALSE(parse_config(std::string(kMaxConfigBytes + 1, '#'), "big.toml", {}, errors));
+  ASSERT_EQ(errors.errors.size(), 1u);
+  EXPECT_NE(errors.errors[0].message.find("1 MiB"), std::string::npos);
+  std::string many;
+  for (int i = 0; i < 500; ++i)
+    many += "bogus_" + std::to_string(i) + " = 1\n";
+  errors = {};
+  EXPECT_FALSE(parse_config(many, "many.toml", {}, errors));
+  EXPECT_EQ(errors.errors.size(), kMaxConfigErrors + 1);
+  EXPECT_NE(errors.errors.back().message.find("stopped checking"), std::string::npos);
+  errors = {};
+  EXPECT_FALSE(parse_config("[daemon]\nlog_level = \"" + std::string(100000, 'x') + "\"\n",
+                            "long.toml", {}, errors));
+  ASSERT_EQ(errors.errors.size(), 1u);
+  EXPECT_LT(errors.errors[0].to_string().size(), 500u);
+  EXPECT_NE(errors.errors[0].to_string().find("trace, debug"), std::string::npos);
+}

@@ -6,9 +6,13 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <condition_variable>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <thread>
+#include <vector>
 
 #include "../common/raw_unix_call.hpp"
 #include "mocap/daemon/control.hpp"
@@ -38,7 +42,12 @@ TEST(ControlProtocol, ParsesCommands) {
   ASSERT_TRUE(r);
   EXPECT_EQ(r->command, ControlCommand::record_start);
   EXPECT_EQ(r->argument, "/tmp/my session.mcap");
-  for (const char* s : {"status", "calibrate npose", "reset-heading", "record stop", "quit"}) {
+  r = parse_control_request("record start", err);  // no name: the daemon picks a fresh one
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->command, ControlCommand::record_start);
+  EXPECT_EQ(r->argument, "");
+  for (const char* s :
+       {"status", "calibrate npose", "reset-heading", "record start", "record stop", "quit"}) {
     auto q = parse_control_request(s, err);
     ASSERT_TRUE(q) << s;
     EXPECT_EQ(format_control_request(*q), std::string(s) + "\n");
@@ -52,7 +61,7 @@ TEST(ControlProtocol, RejectsBadRequests) {
   EXPECT_NE(err.find("usage: calibrate"), std::string::npos);
   EXPECT_FALSE(parse_control_request("calibrate apose", err));
   EXPECT_FALSE(parse_control_request("status now", err));
-  EXPECT_FALSE(parse_control_request("record start", err));
+  EXPECT_FALSE(parse_control_request("record begin", err));
   EXPECT_FALSE(parse_control_request("sudo rm", err));
   EXPECT_NE(err.find("unknown command 'sudo'"), std::string::npos) << err;
   EXPECT_FALSE(parse_control_request(std::string("stat\0us", 7), err));
@@ -122,4 +131,76 @@ TEST(ControlServer, RefusesSecondDaemonAndReplacesStaleSocket) {
   ControlServer c(path, handler, Logger(sink, "c", LogLevel::error));
   EXPECT_EQ(control_call(path, "status"), "{\"ok\":true}");
   EXPECT_THROW(control_call("/nonexistent/dir/x.sock", "status"), std::runtime_error);
+}
+
+TEST(ControlServer, ARequestWhoseClientHungUpIsNotRunLater) {
+  LogSink sink(stderr);
+  const std::string path = temp_socket("gaveup");
+  std::mutex mu;
+  std::condition_variable cv;
+  bool release = false, first_running = false;
+  std::vector<std::string> ran;
+  ControlServer server(
+      path,
+      [&](const ControlRequest& r) {
+        std::unique_lock lock(mu);
+        ran.push_back(format_control_request(r));
+        if (r.command == ControlCommand::calibrate) {
+          first_running = true;
+          cv.notify_all();
+          cv.wait(lock, [&] { return release; });  // a slow command holds the server
+        }
+        return std::string("{\"ok\":true}");
+      },
+      Logger(sink, "control", LogLevel::error));
+  std::string first_reply;
+  std::thread first([&] { first_reply = control_call(path, "calibrate npose", 10000); });
+  {
+    std::unique_lock lock(mu);
+    cv.wait(lock, [&] { return first_running; });
+  }
+  // Meanwhile a client sends `record start` and gives up (closes) before the server reads it.
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::strcpy(a.sun_path, path.c_str());
+  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  const std::string req = "record start late.mcap\n";
+  ASSERT_EQ(::send(fd, req.data(), req.size(), MSG_NOSIGNAL), static_cast<ssize_t>(req.size()));
+  ::close(fd);
+  {
+    std::lock_guard lock(mu);
+    release = true;
+  }
+  cv.notify_all();
+  first.join();
+  EXPECT_EQ(first_reply, "{\"ok\":true}");
+  EXPECT_EQ(control_call(path, "status"), "{\"ok\":true}");
+  std::lock_guard lock(mu);
+  EXPECT_EQ(ran, (std::vector<std::string>{"calibrate npose\n", "status\n"}));
+  EXPECT_EQ(server.requests_abandoned(), 1u);
+}
+
+TEST(ControlServer, SilentClientsDelayNobody) {
+  LogSink sink(stderr);
+  const std::string path = temp_socket("silent");
+  ControlServer server(
+      path, [](const ControlRequest&) { return std::string("{\"ok\":true}"); },
+      Logger(sink, "control", LogLevel::error));
+  // More silent connections than the server keeps: the oldest make room, none blocks.
+  std::vector<int> idle;
+  for (size_t i = 0; i < kMaxControlConnections + 8; ++i) {
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    sockaddr_un a{};
+    a.sun_family = AF_UNIX;
+    std::strcpy(a.sun_path, path.c_str());
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    idle.push_back(fd);
+  }
+  // Shorter than the 2 s a silent connection may stay: the old one-at-a-time server needed that
+  // much per silent client before it read this request.
+  for (int i = 0; i < 5; ++i)
+    EXPECT_EQ(control_call(path, "status", 1500), "{\"ok\":true}");
+  for (int fd : idle)
+    ::close(fd);
 }

@@ -161,10 +161,13 @@ TEST(Session, TruncationAtEveryByteKeepsTheWholeBlocksBefore) {
     ASSERT_EQ(r.end(), boundary ? SessionReader::End::clean : SessionReader::End::torn) << cut;
     ASSERT_EQ(r.tail_offset(), whole ? ends[whole - 1] : header_end);
   }
-  // Cuts inside the header are refused with a message, never a crash.
+  // Cuts inside the header are refused with a message, never a crash; cuts inside its copy
+  // (header_copy blocks) keep the header and no block.
+  const std::size_t primary = 24 + ses::get_u32(bytes.data() + 16);
   for (std::size_t cut = 0; cut < header_end; ++cut) {
     SessionReader r;
-    EXPECT_FALSE(r.open_bytes({bytes.data(), cut}, &err)) << cut;
+    EXPECT_EQ(r.open_bytes({bytes.data(), cut}, &err), cut >= primary) << cut;
+    if (cut >= primary) EXPECT_FALSE(r.next(b));
   }
 }
 
@@ -184,7 +187,7 @@ TEST(Session, ZeroFilledTailAfterPowerLossIsTorn) {
   EXPECT_EQ(r.ignored_bytes(), 4096u);
 }
 
-TEST(Session, CorruptBlockInTheMiddleStopsThereAndSaysWhere) {
+TEST(Session, CorruptBlockInTheMiddleIsSkippedAndReported) {
   TempDir dir;
   auto bytes = write_small_session(dir.file("c.mocap"), 4);
   SessionReader probe;
@@ -194,16 +197,98 @@ TEST(Session, CorruptBlockInTheMiddleStopsThereAndSaysWhere) {
   for (int i = 0; i < 5; ++i)
     ASSERT_TRUE(probe.next(b));
   const uint64_t fifth_end = probe.tail_offset();
+  const int64_t fifth_t = b.sample.t_host_ns;
+  ASSERT_TRUE(probe.next(b));
+  const uint64_t sixth_end = probe.tail_offset();
+  ASSERT_TRUE(probe.next(b));
+  const int64_t seventh_t = b.pose.t_ns;
   bytes[fifth_end + 20] ^= 0x40;  // inside the sixth block's payload
   SessionReader r;
   ASSERT_TRUE(r.open_bytes(bytes, &err));
-  const Counted c = read_and_check(r);
-  EXPECT_EQ(c.blocks, 5);
-  EXPECT_TRUE(c.in_order);
+  int blocks = 0;
+  while (r.next(b))
+    ++blocks;
+  EXPECT_EQ(blocks, 11);  // all but the sixth
   EXPECT_EQ(r.end(), SessionReader::End::corrupt);
-  EXPECT_EQ(r.tail_offset(), fifth_end);
+  EXPECT_EQ(r.tail_offset(), bytes.size());
+  EXPECT_EQ(r.ignored_bytes(), 0u);
+  ASSERT_EQ(r.damaged().size(), 1u);
+  const auto& d = r.damaged()[0];
+  EXPECT_EQ(d.begin, fifth_end);
+  EXPECT_EQ(d.end, sixth_end);
+  EXPECT_EQ(d.t_before_ns, fifth_t);
+  EXPECT_EQ(d.t_after_ns, seventh_t);
+  EXPECT_EQ(r.damaged_bytes(), sixth_end - fifth_end);
   EXPECT_NE(r.tail_reason().find("checksum"), std::string::npos) << r.tail_reason();
   EXPECT_NE(r.tail_reason().find(std::to_string(fifth_end)), std::string::npos);
+}
+
+/// (type, index) of every block of a write_small_session file, in order.
+std::vector<std::pair<int, int64_t>> block_ids(SessionReader& r) {
+  std::vector<std::pair<int, int64_t>> out;
+  SessionReader::Block b;
+  while (r.next(b)) {
+    const int t = static_cast<int>(b.type);
+    out.emplace_back(t, t == 1   ? b.t_host_ns
+                        : t == 2 ? b.sample.seq
+                                 : static_cast<int64_t>(b.pose.frame));
+  }
+  return out;
+}
+
+TEST(Session, OneFlippedBitAnywhereInTheBlocksLosesAtMostItsBlock) {
+  TempDir dir;
+  const auto good = write_small_session(dir.file("f.mocap"), 6);
+  SessionReader full;
+  std::string err;
+  ASSERT_TRUE(full.open_bytes(good, &err));
+  const uint64_t first_block = full.tail_offset();
+  const auto all = block_ids(full);
+  ASSERT_EQ(all.size(), 18u);
+  for (std::size_t at = first_block; at < good.size(); ++at) {
+    auto bytes = good;
+    bytes[at] ^= static_cast<uint8_t>(1u << (at % 8));
+    SessionReader r;
+    ASSERT_TRUE(r.open_bytes(bytes, &err)) << at << ": " << err;
+    const auto got = block_ids(r);
+    ASSERT_GE(got.size(), all.size() - 1) << "bit flipped at " << at;
+    // What was read is the original sequence with at most one block missing.
+    std::size_t j = 0, missing = 0;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (j < got.size() && got[j] == all[i])
+        ++j;
+      else
+        ++missing;
+    }
+    ASSERT_EQ(j, got.size()) << "bit flipped at " << at;
+    ASSERT_LE(missing, 1u) << at;
+    if (missing) {
+      ASSERT_NE(r.end(), SessionReader::End::clean) << at;
+      ASSERT_FALSE(r.tail_reason().empty()) << at;
+    }
+  }
+}
+
+TEST(Session, OneFlippedBitInTheHeaderIsRecoveredFromItsCopy) {
+  TempDir dir;
+  const auto good = write_small_session(dir.file("h.mocap"), 3);
+  const std::size_t primary = 24 + ses::get_u32(good.data() + 16);
+  SessionReader full;
+  std::string err;
+  ASSERT_TRUE(full.open_bytes(good, &err));
+  EXPECT_FALSE(full.header_recovered());
+  const auto all = block_ids(full);
+  for (std::size_t at = 0; at < primary; ++at) {
+    auto bytes = good;
+    bytes[at] ^= static_cast<uint8_t>(1u << (at % 8));
+    SessionReader r;
+    ASSERT_TRUE(r.open_bytes(bytes, &err)) << at << ": " << err;
+    EXPECT_TRUE(r.header_recovered()) << at;
+    EXPECT_FALSE(r.header_damage().empty()) << at;
+    EXPECT_EQ(r.header(), make_header()) << at;
+    EXPECT_EQ(block_ids(r), all) << at;
+    EXPECT_EQ(r.end(), SessionReader::End::clean) << at;
+  }
 }
 
 TEST(Session, ForeignFilesVersionsAndOversizedLengthsAreRejectedClearly) {
@@ -217,18 +302,29 @@ TEST(Session, ForeignFilesVersionsAndOversizedLengthsAreRejectedClearly) {
     EXPECT_FALSE(rr.open_bytes(bytes, &e));
     EXPECT_NE(e.find(needle), std::string::npos) << "got: " << e;
   };
-  auto v2 = good;
+  // The header alone (as version-1 files written before the header copy existed, or a file
+  // whose copy is damaged too): each problem is named.
+  const std::vector<uint8_t> header_only(good.begin(),
+                                         good.begin() + 24 + ses::get_u32(good.data() + 16));
+  auto v2 = header_only;
   ses::put_u32(v2.data() + 8, 2);
   expect_error(v2, "version 2 is not supported");
-  auto be = good;
+  auto be = header_only;
   ses::put_u32(be.data() + 12, 0x04030201);
   expect_error(be, "byte-order");
-  auto huge = good;
+  auto huge = header_only;
   ses::put_u32(huge.data() + 16, 0xffffffffu);
   expect_error(huge, "exceeds the 4 MiB limit");
-  auto bad_crc = good;
+  auto bad_crc = header_only;
   bad_crc[30] ^= 1;
   expect_error(bad_crc, "checksum");
+  {  // A file without the copy (older writers) still reads.
+    SessionReader old;
+    ASSERT_TRUE(old.open_bytes(header_only, &err)) << err;
+    SessionReader::Block blk;
+    EXPECT_FALSE(old.next(blk));
+    EXPECT_EQ(old.end(), SessionReader::End::clean);
+  }
   expect_error({'h', 'e', 'l', 'l', 'o'}, "not a mocap session file");
   EXPECT_FALSE(r.open(dir.file("missing.mocap"), &err));
   EXPECT_NE(err.find("missing.mocap"), std::string::npos);
@@ -241,9 +337,14 @@ TEST(Session, ForeignFilesVersionsAndOversizedLengthsAreRejectedClearly) {
   SessionReader r2;
   ASSERT_TRUE(r2.open_bytes(long_block, &err));
   SessionReader::Block b;
-  EXPECT_FALSE(r2.next(b));
+  int after = 0;
+  while (r2.next(b))
+    ++after;
+  EXPECT_EQ(after, 2);  // the sample and raw blocks after it
   EXPECT_EQ(r2.end(), SessionReader::End::corrupt);
   EXPECT_NE(r2.tail_reason().find("exceeds the limit"), std::string::npos);
+  ASSERT_EQ(r2.damaged().size(), 1u);
+  EXPECT_EQ(r2.damaged()[0].begin, first_block);
 
   // Over-long header fields are refused by the writer too.
   auto h = make_header();

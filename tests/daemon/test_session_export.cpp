@@ -2,6 +2,7 @@
 // a file of an unknown version, usage errors, BVH, glTF and OpenSim output).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <zlib.h>
 
 #include <Eigen/Geometry>
 #include <cstring>
@@ -93,11 +94,20 @@ TEST(SessionExport, BadInputsGiveClearErrors) {
   TempDir dir;
   const std::string ses = dir.file("v.mocap"), err = dir.file("err");
   record(ses, 1);
-  {
+  {  // a version-9 file: its header is intact (valid CRC), so it is not taken for damage
     std::fstream f(ses, std::ios::in | std::ios::out | std::ios::binary);
-    f.seekp(8);
-    const char v9[4] = {9, 0, 0, 0};
-    f.write(v9, 4);
+    std::vector<uint8_t> head(20);
+    f.read(reinterpret_cast<char*>(head.data()), 20);
+    head.resize(20 + mocap::session::get_u32(head.data() + 16));
+    f.read(reinterpret_cast<char*>(head.data() + 20),
+           static_cast<std::streamsize>(head.size() - 20));
+    mocap::session::put_u32(head.data() + 8, 9);
+    uint8_t crc[4];
+    mocap::session::put_u32(
+        crc, static_cast<uint32_t>(crc32(0L, head.data(), static_cast<uInt>(head.size()))));
+    f.seekp(0);
+    f.write(reinterpret_cast<const char*>(head.data()), static_cast<std::streamsize>(head.size()));
+    f.write(reinterpret_cast<const char*>(crc), 4);
   }
   EXPECT_EQ(run(ses + " --csv " + dir.file("o.csv"), err), 1);
   EXPECT_NE(read_text(err).find("version 9 is not supported"), std::string::npos) << read_text(err);

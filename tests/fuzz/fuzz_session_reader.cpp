@@ -28,7 +28,7 @@ std::vector<uint8_t> framed(const uint8_t* data, size_t size) {
     const size_t len = std::min<size_t>(data[i + 1] | (data[i + 2] << 8), size - i - 3);
     i += 3;
     uint8_t hdr[ses::kBlockHeaderBytes];
-    ses::encode_block_header(static_cast<ses::BlockType>(type % 5), static_cast<uint32_t>(len),
+    ses::encode_block_header(static_cast<ses::BlockType>(type % 6), static_cast<uint32_t>(len),
                              hdr);
     uLong crc = crc32(crc32(0L, hdr, sizeof hdr), data + i, static_cast<uInt>(len));
     out.insert(out.end(), hdr, hdr + sizeof hdr);

@@ -1,8 +1,9 @@
 // mocap export: converts the poses recorded in a session file (docs/session-format.md) to CSV
 // (t,segment,w,x,y,z,px,py,pz: one row per segment per frame), BVH (the skeleton's BvhWriter,
 // body height from the recorded configuration), binary glTF (GltfWriter) or an OpenSense
-// orientations table (OpenSimWriter). A torn or corrupt tail is reported and everything before
-// it is exported.
+// orientations table (OpenSimWriter). Damaged ranges are skipped and reported (exit status 3),
+// a torn tail is reported; everything intact is exported.
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -34,21 +35,59 @@ constexpr const char* kExportUsage =
     "OpenSim: an OpenSense orientations table (pelvis_imu, femur_r_imu, ...: w,x,y,z in\n"
     "OpenSim's y-up ground frame). BVH, glTF and OpenSim are resampled to one fixed frame time\n"
     "(the recorded pipeline rate or --rate). A sensor's dropout of up to 0.5 s is bridged (its\n"
-    "segment slerped across the gap).\n";
+    "segment slerped across the gap).\n"
+    "A damaged session is read around the damage: every intact block is exported and each\n"
+    "damaged range is reported (bytes, time span).\n"
+    "Exit status: 0 exported (a torn tail after a crash is reported, not an error); 1 error;\n"
+    "2 usage; 3 exported, but damaged data was skipped.\n";
 
-/// Tells the user how reading ended when it did not end cleanly.
-void report_tail(const SessionReader& r, const std::string& path) {
+/// Exit status of `mocap export` when damaged data was skipped (everything intact exported).
+constexpr int kExitDamaged = 3;
+
+/// Tells the user how reading ended when it did not end cleanly: the header recovered from its
+/// copy, each damaged range skipped (bytes and time span since the recording's start), a torn
+/// tail. Returns true if data was lost to damage.
+bool report_tail(const SessionReader& r, const std::string& path) {
   using End = SessionReader::End;
-  if (r.end() == End::torn)
+  if (r.header_recovered())
+    std::fprintf(stderr, "mocap export: %s: header damaged (%s); read from its copy\n",
+                 path.c_str(), r.header_damage().c_str());
+  const int64_t t0 = r.header().t_start_host_ns;
+  const auto secs = [t0](int64_t t) -> std::string {
+    if (t < 0) return "?";
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3f s", static_cast<double>(t - t0) * 1e-9);
+    return b;
+  };
+  for (const auto& d : r.damaged()) {
+    // Blocks of different streams interleave: show the span in time order.
+    const int64_t lo = d.t_after_ns < 0 ? d.t_before_ns : std::min(d.t_before_ns, d.t_after_ns);
+    const int64_t hi = d.t_after_ns < 0 ? -1 : std::max(d.t_before_ns, d.t_after_ns);
+    std::fprintf(stderr,
+                 "mocap export: %s: damaged bytes %llu-%llu (%llu bytes, between %s and %s of "
+                 "the recording) skipped: %s\n",
+                 path.c_str(), static_cast<unsigned long long>(d.begin),
+                 static_cast<unsigned long long>(d.end),
+                 static_cast<unsigned long long>(d.end - d.begin), secs(lo).c_str(),
+                 hi < 0 ? "the end" : secs(hi).c_str(), d.reason.c_str());
+  }
+  if (r.end() != End::clean && r.ignored_bytes() > 0 && r.damaged().empty())
     std::fprintf(stderr,
                  "mocap export: %s: %s; the last %llu bytes (an unfinished write) were "
                  "ignored\n",
                  path.c_str(), r.tail_reason().c_str(),
                  static_cast<unsigned long long>(r.ignored_bytes()));
-  else if (r.end() == End::corrupt)
-    std::fprintf(stderr, "mocap export: %s: damaged: %s; %llu bytes after it were not read\n",
-                 path.c_str(), r.tail_reason().c_str(),
-                 static_cast<unsigned long long>(r.ignored_bytes()));
+  else if (r.end() != End::clean && r.ignored_bytes() > 0 &&
+           r.damaged().back().begin != r.tail_offset())
+    std::fprintf(stderr, "mocap export: %s: %s; the last %llu bytes were ignored\n", path.c_str(),
+                 r.tail_reason().c_str(), static_cast<unsigned long long>(r.ignored_bytes()));
+  if (!r.damaged().empty())
+    std::fprintf(stderr,
+                 "mocap export: %s: %zu damaged range%s (%llu bytes) skipped; everything intact "
+                 "was exported (exit status %d)\n",
+                 path.c_str(), r.damaged().size(), r.damaged().size() == 1 ? "" : "s",
+                 static_cast<unsigned long long>(r.damaged_bytes()), kExitDamaged);
+  return r.end() == End::corrupt;
 }
 
 /// The configuration recorded in the session (body model, pipeline rate), or the defaults.
@@ -168,7 +207,7 @@ int export_poses(SessionReader& r, const std::string& in, const std::string& out
     std::fprintf(stderr, "mocap export: %s\n", e.what());
     return 1;
   }
-  report_tail(r, in);
+  const bool damaged = report_tail(r, in);
   if (frames == 0) {
     std::fprintf(stderr, "mocap export: %s holds no poses\n", in.c_str());
     return 1;
@@ -177,7 +216,7 @@ int export_poses(SessionReader& r, const std::string& in, const std::string& out
   if (rate_hz > 0) std::fprintf(stderr, " at %.6g Hz", rate_hz);
   std::fprintf(stderr, " (body height %.2f m; %ld segment-frames bridged across dropouts) -> %s\n",
                body.dimensions().height_m, poses.bridged(), out.c_str());
-  return 0;
+  return damaged ? kExitDamaged : 0;
 }
 
 }  // namespace

@@ -13,14 +13,17 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 
+#include "mocap/core/runtime_dir.hpp"
 #include "mocap/core/time.hpp"
 
 namespace mocap::viewer {
 
 std::string default_control_socket_path() {
-  if (const char* dir = std::getenv("XDG_RUNTIME_DIR"); dir && *dir)
-    return std::string(dir) + "/mocapd.sock";
-  return "/tmp/mocapd-" + std::to_string(getuid()) + ".sock";
+  // The daemon's private runtime directory (mocap/core/runtime_dir.hpp); if there is none the
+  // path names the reason's directory and connecting fails with a message.
+  std::string error;
+  const std::string dir = private_runtime_dir(&error);
+  return (dir.empty() ? "/nonexistent-private-runtime-dir" : dir) + "/mocapd.sock";
 }
 
 // Request lines of the daemon's control protocol (mocap/daemon/control.hpp).

@@ -161,6 +161,15 @@ struct Config {
   std::vector<SensorConfig> sensors;
 };
 
+/// Limits of a configuration: its size, the problems reported before checking stops, and the
+/// length of a key or message in a report (longer ones are cut, never echoed whole).
+inline constexpr std::size_t kMaxConfigBytes = 1u << 20;
+inline constexpr std::size_t kMaxConfigErrors = 50;
+inline constexpr std::size_t kMaxConfigMessageKey = 120;
+inline constexpr std::size_t kMaxConfigMessage = 300;
+/// `s` if at most `max` bytes, else its start and how many bytes were left out.
+std::string cut_for_message(std::string_view s, std::size_t max);
+
 /// A problem found while loading: where, which key, what.
 struct ConfigError {
   std::string file;
@@ -212,7 +221,8 @@ std::string nearest_name(std::string_view word, const std::vector<std::string_vi
 
 /// Log level of a name validated by the loader.
 LogLevel log_level_of(std::string_view name);
-/// "$XDG_RUNTIME_DIR/mocapd.sock" (or /tmp/mocapd-<uid>.sock without XDG_RUNTIME_DIR).
+/// "<runtime dir>/mocapd.sock": $XDG_RUNTIME_DIR, else a private 0700 directory
+/// (mocap/core/runtime_dir.hpp). Throws std::runtime_error when there is none.
 std::string default_control_socket();
 
 }  // namespace mocap::daemon

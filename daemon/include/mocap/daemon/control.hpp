@@ -2,14 +2,21 @@
 // single text line ("status", "calibrate npose", "record start FILE", ...); the reply is one
 // line of JSON ({"ok":true,...} or {"ok":false,"error":"..."}). The socket is a Unix-domain
 // stream socket with mode 0600; malformed or oversized requests get an error reply.
+// Connections are served independently by one thread with non-blocking sockets and
+// per-connection buffers: a silent client delays nobody (it is closed after 2 s, or when 32
+// are open and a new one arrives, oldest first); a request whose client has hung up before it
+// is run is dropped, not run; when the fd limit is reached a reserve fd is given up to accept
+// the connection, and accepting pauses for 100 ms if even that is gone (never a busy loop).
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
+#include <vector>
 
 #include "mocap/core/log.hpp"
 #include "mocap/core/wakeup.hpp"
@@ -17,12 +24,14 @@
 namespace mocap::daemon {
 
 inline constexpr size_t kMaxControlRequest = 4096;
+inline constexpr size_t kMaxControlConnections = 32;
 
 enum class ControlCommand { status, calibrate, reset_heading, record_start, record_stop, quit };
 
 struct ControlRequest {
   ControlCommand command = ControlCommand::status;
-  std::string argument;  ///< "npose"/"tpose" for calibrate, the file for record start
+  std::string argument;  ///< "npose"/"tpose" for calibrate, the file for record start ("" = fresh)
+  bool unique = false;   ///< record start (not on the wire): a -N suffix if the name is taken
 };
 
 /// Parses one request line (without or with its trailing newline). Returns the request, or
@@ -46,10 +55,32 @@ class ControlServer {
 
   const std::string& path() const { return path_; }
   uint64_t requests_served() const { return served_.load(); }
+  /// Requests dropped unrun because their client had hung up.
+  uint64_t requests_abandoned() const { return abandoned_.load(); }
 
  private:
+  struct Conn {
+    int fd = -1;
+    std::string in, out;  ///< request bytes so far; reply bytes still to send
+    std::size_t out_pos = 0;
+    int64_t deadline_ns = 0;  ///< request complete or reply sent by then, else closed
+    int64_t accepted_ns = 0;
+    bool replying = false;
+  };
   void run();
-  void serve_one(int fd);
+  void accept_connections(int64_t now);
+  /// Reads what arrived; returns false when the connection is to be closed.
+  bool on_input(Conn& c, short revents);
+  /// Runs the request (unless its client hung up) and queues the reply.
+  void answer(Conn& c, bool complete, bool too_long);
+  /// Sends queued reply bytes; false when done or failed (close it).
+  bool send_reply(Conn& c);
+  void close_conn(std::size_t i);
+
+  std::vector<Conn> conns_;
+  int reserve_fd_ = -1;
+  int64_t accept_paused_until_ = 0;
+  std::atomic<uint64_t> abandoned_{0};
 
   std::string path_;
   Handler handler_;

@@ -20,14 +20,30 @@ namespace mocap::daemon {
 /// Makes a live device for a spec (mocapd passes mocap::make_device).
 using DeviceFactory = std::function<std::unique_ptr<Device>(const DeviceSpec&, Logger)>;
 
+/// What a finished recording holds (the `record stop` reply).
+struct RecordingSummary {
+  std::string path;
+  double duration_s = 0;    ///< from start to stop (monotonic clock)
+  uint64_t frames = 0;      ///< pose frames accepted
+  uint64_t samples = 0;     ///< samples accepted
+  uint64_t raw_blocks = 0;  ///< raw byte blocks accepted
+  uint64_t drops = 0;       ///< blocks dropped (writer behind, or the recording had stopped)
+  uint64_t bytes = 0;       ///< file size on disk, header included
+  std::string error;        ///< why the recording stopped early ("" if it did not)
+};
+
 /// Starts and stops a recording (the session writer lives behind this).
 class Recorder {
  public:
   virtual ~Recorder() = default;
-  /// Opens `path`; returns the tap to install, or throws std::runtime_error.
-  virtual RecordTap* start(const std::string& path) = 0;
+  /// Creates a new file for `name` (see recording_file.hpp: exclusive, inside
+  /// recording.directory; "" = a fresh take name; `unique`: a -N suffix instead of an error
+  /// when the name is taken) and returns the tap to install, or throws std::runtime_error.
+  virtual RecordTap* start(const std::string& name, bool unique) = 0;
+  /// The file being recorded ("" when not recording).
+  virtual std::string path() const = 0;
   /// Flushes and closes the current recording (after the tap was removed).
-  virtual void stop() = 0;
+  virtual RecordingSummary stop() = 0;
   /// Non-empty if the recording stopped by itself (e.g. disk full).
   virtual std::string error() const { return {}; }
 };

@@ -1,7 +1,11 @@
 // The pose JSON stream: every PoseFrame as one line of JSON over TCP to any number of clients
 // (schema in docs/streaming.md). publish() is called from the pipeline thread: it formats once
 // into a preallocated slot and hands it to an I/O thread that serves non-blocking sockets under
-// poll(); slow clients skip frames, the pipeline never blocks.
+// poll(); slow clients skip frames, the pipeline never blocks. When max_clients are connected, a
+// new client takes the place of one that does not read (its kernel buffer full for 0.5 s, the
+// longest first; else the most unsent bytes, at least 128 KiB), else it is closed. When the process
+// runs out of file descriptors, a reserve fd is given up to accept and close the connection, and
+// accepting pauses for 100 ms (never a busy loop).
 #pragma once
 
 #include <atomic>
@@ -28,9 +32,9 @@ std::size_t format_pose_json(const PoseFrame& frame, char* out, std::size_t capa
 class PoseJsonServer {
  public:
   struct Options {
-    std::string bind_address = "127.0.0.1";        ///< IPv4 address to listen on (loopback default)
-    uint16_t port = 0;                             ///< 0 = pick a free port (see port())
-    int max_clients = 32;                          ///< further connections are closed at once
+    std::string bind_address = "127.0.0.1";  ///< IPv4 address to listen on (loopback default)
+    uint16_t port = 0;                       ///< 0 = pick a free port (see port())
+    int max_clients = 32;  ///< further connections evict a stalled client or are closed at once
     std::size_t client_buffer_bytes = 256 * 1024;  ///< per-client queue of whole lines
     std::size_t max_client_input_bytes = 4096;     ///< a client sending more is dropped
     int realtime_priority = 0;  ///< SCHED_FIFO priority of the I/O thread (0 = normal)
@@ -43,6 +47,7 @@ class PoseJsonServer {
     uint64_t clients_accepted = 0;   ///< ever accepted and served
     uint64_t clients_rejected = 0;   ///< closed at once because max_clients were connected
     uint64_t clients_dropped = 0;    ///< disconnected for sending too much input
+    uint64_t clients_evicted = 0;    ///< disconnected to make room: not reading
     uint64_t bytes_sent = 0;
   };
 
@@ -75,7 +80,7 @@ class PoseJsonServer {
   struct Client;
   struct Counters {
     std::atomic<uint64_t> published{0}, dropped{0}, skipped{0}, connected{0}, accepted{0},
-        rejected{0}, abusive{0}, bytes_sent{0};
+        rejected{0}, abusive{0}, evicted{0}, bytes_sent{0};
   };
 
   void run();
@@ -97,6 +102,8 @@ class PoseJsonServer {
   std::size_t client_count_ = 0;
   std::unique_ptr<char[]> scratch_;
   Counters counters_;
+  int reserve_fd_ = -1;              ///< given up to shed a connection when out of fds
+  int64_t accept_paused_until_ = 0;  ///< I/O thread: no accept before (fds exhausted)
 };
 
 }  // namespace mocap::daemon

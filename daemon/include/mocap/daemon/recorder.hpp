@@ -3,6 +3,7 @@
 // socket starts and stops.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <string>
@@ -22,8 +23,9 @@ class SessionRecorder final : public Recorder, public RecordTap {
   SessionRecorder(Config cfg, std::function<std::string()> calibration_text, Logger log);
   ~SessionRecorder() override;
 
-  RecordTap* start(const std::string& path) override;
-  void stop() override;
+  RecordTap* start(const std::string& name, bool unique) override;
+  std::string path() const override;
+  RecordingSummary stop() override;
   std::string error() const override;
 
   void on_raw(uint16_t device_index, int64_t t_host_ns, std::span<const uint8_t> bytes) override;
@@ -35,6 +37,8 @@ class SessionRecorder final : public Recorder, public RecordTap {
   std::function<std::string()> calibration_text_;
   Logger log_;
   std::unique_ptr<SessionWriter> writer_;
+  int64_t started_ns_ = 0;
+  std::atomic<uint64_t> frames_{0}, samples_{0}, raw_blocks_{0};
 };
 
 }  // namespace mocap::daemon

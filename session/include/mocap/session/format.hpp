@@ -35,7 +35,13 @@ inline constexpr std::size_t kMaxPosePayload = kPoseFixedBytes + kPoseSensorByte
 /// Largest payload of any block type this version knows or skips.
 inline constexpr std::size_t kMaxBlockPayload = kRawPrefixBytes + kMaxRawChunk;
 
-enum class BlockType : uint8_t { raw = 1, sample = 2, pose = 3 };
+/// header_copy (4): a copy of the file header (all its bytes, magic to CRC) in one or more
+/// blocks right after it, so a damaged header is recovered from them. Readers that do not know
+/// the type skip it (checksum-valid unknown blocks are skipped by every version-1 reader).
+enum class BlockType : uint8_t { raw = 1, sample = 2, pose = 3, header_copy = 4 };
+/// header_copy payload prefix: u32 total header bytes, u32 offset of this chunk.
+inline constexpr std::size_t kHeaderCopyPrefixBytes = 8;
+inline constexpr std::size_t kHeaderCopyChunk = kMaxBlockPayload - kHeaderCopyPrefixBytes;
 
 /// One sensor of the rig as recorded in the header.
 struct SensorDescription {
@@ -58,6 +64,9 @@ struct SessionHeader {
 /// The complete file prefix (magic, version, endian tag, header, CRC). Returns false with a
 /// message if a field exceeds its limit.
 bool encode_file_header(const SessionHeader& header, std::vector<uint8_t>& out, std::string* error);
+/// Appends the header_copy blocks (with block headers and CRCs) for a complete file prefix as
+/// encode_file_header() made it.
+void encode_header_copy_blocks(std::span<const uint8_t> file_header, std::vector<uint8_t>& out);
 /// Parses the header payload (the bytes between the length field and the CRC).
 bool decode_header_payload(std::span<const uint8_t> payload, SessionHeader& header,
                            std::string* error);

@@ -1,7 +1,9 @@
 // SessionReader: reads a session file (docs/session-format.md) block by block. Rejects unknown
-// versions and foreign files with a clear message; stops at the first torn or corrupt block
-// and reports where, keeping every good block before it. Lengths are checked against the
-// format's limits before anything is allocated.
+// versions and foreign files with a clear message; recovers a damaged header from its copy
+// (header_copy blocks); skips a damaged block by resynchronising on the next valid one (sync
+// marker, length, CRC, decodes) and reports each damaged range (bytes and time span); a torn
+// tail ends reading. Lengths are checked against the format's limits before anything is
+// allocated.
 #pragma once
 
 #include <cstdint>
@@ -31,7 +33,15 @@ class SessionReader {
     not_reached,  ///< next() has not returned false yet
     clean,        ///< the file ends exactly after a whole block
     torn,         ///< the last block is incomplete (crash or power loss while writing)
-    corrupt,      ///< a block fails its checksum or does not decode
+    corrupt,      ///< damaged data was skipped (see damaged()) or ends the file
+  };
+  /// Bytes skipped because they are not a valid block (damage), between two good blocks or
+  /// before a corrupt (not merely torn) end.
+  struct DamagedRange {
+    uint64_t begin = 0, end = 0;  ///< file offsets [begin, end)
+    int64_t t_before_ns = -1;     ///< host time of the last good block before (-1: none)
+    int64_t t_after_ns = -1;      ///< host time of the first good block after (-1: none)
+    std::string reason;           ///< what was wrong at `begin`
   };
 
   SessionReader() = default;
@@ -53,20 +63,39 @@ class SessionReader {
   bool seek(uint64_t offset);
 
   End end() const { return end_; }
-  /// Offset of the first byte not part of a good block (the file size after a clean end).
+  /// While reading: the offset of the next block; at the end: the first byte after the last
+  /// good block (the file size after a clean end).
   uint64_t tail_offset() const { return offset_; }
   /// Bytes after tail_offset() that were ignored.
   uint64_t ignored_bytes() const { return size_ > offset_ ? size_ - offset_ : 0; }
-  /// Why reading stopped early (empty after a clean end).
+  /// Why reading ended early, or the first damage skipped (empty after a clean, undamaged end).
   const std::string& tail_reason() const { return tail_reason_; }
+  /// Every damaged range skipped so far, in file order.
+  const std::vector<DamagedRange>& damaged() const { return damaged_; }
+  /// Total bytes in damaged() ranges.
+  uint64_t damaged_bytes() const;
+  /// The header was damaged and read from its copy (header_copy blocks); why it was damaged.
+  bool header_recovered() const { return !header_damage_.empty(); }
+  const std::string& header_damage() const { return header_damage_; }
   /// Blocks of a type this version does not know, skipped (checksum-valid).
   uint64_t unknown_blocks() const { return unknown_blocks_; }
 
  private:
+  /// Outcome of reading one block at an offset.
+  enum class Parse : uint8_t { ok, skip, eof, bad };
   bool read_header(const std::string& name, std::string* error);
+  bool recover_header(std::string* why);
+  bool primary_crc_ok();
+  void skip_header_copies();
   bool stop(End end, std::string reason);
+  std::size_t read_at(uint64_t offset, uint8_t* dst, std::size_t n);
+  /// Reads and checks the block at `at`; on bad: `end_kind` (torn or corrupt) and `why`.
+  Parse parse_at(uint64_t at, Block& block, uint64_t& block_end, End& end_kind, std::string& why);
+  /// The offset of the next valid block after `from` (UINT64_MAX if none).
+  uint64_t resync(uint64_t from, Block& scratch, uint64_t limit);
 
   std::FILE* file_ = nullptr;
+  uint64_t file_pos_ = 0;  ///< where file_'s stream stands
   std::vector<uint8_t> memory_;
   uint64_t size_ = 0;
   uint64_t offset_ = 0;
@@ -76,6 +105,11 @@ class SessionReader {
   End end_ = End::not_reached;
   std::string tail_reason_;
   uint64_t unknown_blocks_ = 0;
+  std::vector<DamagedRange> damaged_;
+  bool damage_open_ = false;  ///< damaged_.back() waits for its t_after_ns
+  int64_t last_t_ns_ = -1;    ///< host time of the last good block
+  std::string header_damage_;
+  std::vector<uint8_t> scan_;  ///< resync window
 };
 
 }  // namespace mocap

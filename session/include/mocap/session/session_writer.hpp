@@ -49,6 +49,11 @@ class SessionWriter {
   static std::unique_ptr<SessionWriter> create(const std::string& path,
                                                const session::SessionHeader& header,
                                                Options options, std::string* error);
+  /// Same on a file the caller opened for writing (e.g. created exclusively); takes the fd
+  /// (closed on failure too). `path` names the file in messages.
+  static std::unique_ptr<SessionWriter> create_fd(int fd, const std::string& path,
+                                                  const session::SessionHeader& header,
+                                                  Options options, std::string* error);
 
   // Producers (the pipeline thread; safe from several threads). Never block on I/O, never
   // allocate. Return false if the block was dropped (buffer full or recording stopped).
