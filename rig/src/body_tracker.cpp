@@ -15,7 +15,6 @@ namespace {
 CalibratorOptions calibrator_options(const std::vector<TrackerSensor>& sensors,
                                      const TrackerOptions& o) {
   CalibratorOptions c = o.calibrator;
-  c.independent_headings = !o.use_mag;
   if (c.heading == HeadingSource::mount_normals) {
     // A sensor lies flat on its site: its z axis is the site's outward normal.
     c.heading_axis_sensor = Eigen::Vector3d::UnitZ();
@@ -51,7 +50,8 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       filters_(sensors_.size(), AttitudeFilter(opt_.filter)),
       skeleton_(model, limits, rig_mapping(sensors_), opt_.skeleton),
       calibrator_(rig_mapping(sensors_), calibrator_options(sensors_, opt_)),
-      heading_(opt_.heading_from_motion) {}
+      heading_(opt_.heading_from_motion),
+      has_mag_(sensors_.size(), false) {}
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
   const AttitudeFilter& f = filters_[static_cast<size_t>(i)];
@@ -64,6 +64,7 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
   AttitudeFilter& f = filters_[static_cast<size_t>(i)];
   // 1. Gyro scale (1 when uncalibrated); a 6D rig ignores any magnetometer.
   ImuSample s = in;
+  if (s.has(kFieldMag)) has_mag_[static_cast<size_t>(i)] = true;
   s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(sensor.gyr_scale);
   if (!opt_.use_mag) s.valid = static_cast<uint8_t>(s.valid & ~kFieldMag);
   // 2. Filter.
@@ -76,6 +77,7 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
   if (calibrator_.capturing()) {
     calibrator_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
     if (calibrator_.done(s.t_host_ns)) {
+      calibrator_.set_own_heading_frames(own_heading_frames());
       result_ = calibrator_.finish();
       if (result_->ok()) {
         skeleton_.set_calibration(result_->calibration);
@@ -96,15 +98,30 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
   skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags);
 }
 
+std::array<bool, kSegmentCount> BodyTracker::own_heading_frames() const {
+  std::array<bool, kSegmentCount> own{};
+  for (int i = 0; i < sensor_count(); ++i) {
+    const int seg = sensors_[static_cast<size_t>(i)].segment;
+    if (seg >= 0) own[seg] = !opt_.use_mag || !has_mag_[static_cast<size_t>(i)];
+  }
+  return own;
+}
+
 void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
   std::array<int, kSegmentCount> reference;
   reference.fill(-1);
   const RigMapping& rig = skeleton_.rig();
-  if (!opt_.use_mag && opt_.calibrator.heading == HeadingSource::mount_normals)
+  const std::array<bool, kSegmentCount> own = own_heading_frames();
+  // A segment's heading is known when its sensor shares the earth frame (magnetometer) or was
+  // aligned from its own site normal; the others are fitted to the nearest known one above.
+  const auto known = [&](int s) {
+    return rig.tracked(s) && (!own[s] || r.heading_from_own_normal[s]);
+  };
+  if (opt_.calibrator.heading == HeadingSource::mount_normals)
     for (int s = 0; s < kSegmentCount; ++s) {
-      if (!rig.tracked(s) || r.heading_from_own_normal[s]) continue;
+      if (!rig.tracked(s) || known(s)) continue;
       int p = kSegmentParent[s];
-      while (p >= 0 && !(rig.tracked(p) && r.heading_from_own_normal[p]))
+      while (p >= 0 && !known(p))
         p = kSegmentParent[p];
       reference[s] = p;
     }

@@ -236,20 +236,38 @@ CalibrationResult Calibrator::finish() {
         }
         return std::atan2(sy, sx);
       };
+      // Sensors with a heading frame of their own do not vote on the body heading.
+      std::array<bool, kSegmentCount> own_frame_use{};
+      bool any_own = false;
+      for (int i = 0; i < kSegmentCount; ++i) {
+        const bool own = opt_.own_heading_frame[i] && rig_.tracked(i);
+        any_own = any_own || own;
+        own_frame_use[i] = own && use[i];
+        if (own) use[i] = false;
+      }
       int used = 0;
-      if (opt_.independent_headings) {
-        // Each sensor's own heading frame: align each on its own normal (the body faces +x).
-        for (int i = 0; i < kSegmentCount; ++i) {
-          int from = i;
-          while (from >= 0 && !use[from])
-            from = kSegmentParent[from];
-          if (from < 0 || !rig_.tracked(i)) continue;
-          r.calibration.q_correction[i] = yaw_rotation(-h_site[from]);
-          r.heading_from_own_normal[i] = from == i;
-          if (from == i) ++used;
-        }
+      if (any_own) {
+        bool any_shared = false;
+        for (int i = 0; i < kSegmentCount; ++i)
+          any_shared = any_shared || use[i];
         heading_rad = 0;
-        if (used == 0) independent_unaligned = true;
+        if (any_shared) {
+          heading_rad = circular_mean(0, 4 * M_PI, used);
+          heading_rad = circular_mean(heading_rad, kMaxNormalSpreadDeg * kDegToRad, used);
+        }
+        // Each own-frame sensor aligned on its own normal onto that body heading.
+        int aligned = 0;
+        for (int i = 0; i < kSegmentCount; ++i) {
+          if (!opt_.own_heading_frame[i] || !rig_.tracked(i)) continue;
+          int from = i;
+          while (from >= 0 && !own_frame_use[from])
+            from = kSegmentParent[from];
+          r.heading_from_own_normal[i] = from == i;
+          if (from < 0) continue;
+          r.calibration.q_correction[i] = yaw_rotation(heading_rad - h_site[from]);
+          aligned += from == i;
+        }
+        if (aligned == 0) independent_unaligned = true;
         break;
       }
       heading_rad = circular_mean(0, 4 * M_PI, used);

@@ -91,10 +91,10 @@ TEST(BodyTracker, EachSegmentIsItsSensorsFilterThroughTheCalibration) {
   }
 }
 
-TEST(BodyTracker, SixDCalibratesWithoutAMagnetometerAndMarksTheBorrowedHeadings) {
+void six_d_calibration(bool rig_use_mag) {
   Rig rig;
   TrackerOptions o;
-  o.use_mag = false;
+  o.use_mag = rig_use_mag;
   o.calibrator.heading = HeadingSource::mount_normals;
   o.calibrator.capture_s = 1.0;
   BodyTracker tracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
@@ -111,6 +111,16 @@ TEST(BodyTracker, SixDCalibratesWithoutAMagnetometerAndMarksTheBorrowedHeadings)
   EXPECT_TRUE(res->heading_from_own_normal[index(Segment::thigh_l)]);
   EXPECT_FALSE(res->heading_from_own_normal[index(Segment::foot_l)]);  // vertical normal
   EXPECT_TRUE(tracker.heading_from_motion().active());
+}
+
+TEST(BodyTracker, SixDCalibratesWithoutAMagnetometerAndMarksTheBorrowedHeadings) {
+  six_d_calibration(false);
+}
+
+// A 9D rig whose sensors send no magnetometer samples (a 6D device in a default config):
+// calibrated as 6D, never refused.
+TEST(BodyTracker, SensorsWithoutMagnetometerSamplesAreTakenAsSixD) {
+  six_d_calibration(true);
 }
 
 }  // namespace

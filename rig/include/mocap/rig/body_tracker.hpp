@@ -28,7 +28,8 @@
 
 namespace mocap::rig {
 
-/// One sensor of the rig.
+/// One sensor of the rig. A sensor that sends no magnetometer samples is taken as 6D even in a
+/// 9D rig (its heading aligned at calibration on its own, like a 6D rig's).
 struct TrackerSensor {
   int segment = -1;  ///< segment index it is strapped on, -1: not on the body (filtered only)
   /// Gyro scale per axis from the sensor's table-spin calibration (1 = uncalibrated).
@@ -96,6 +97,9 @@ class BodyTracker {
   std::optional<CalibrationResult> result_;
   int64_t newest_t_ns_ = 0;
   HeadingFromMotion heading_;
+  std::vector<bool> has_mag_;  ///< per sensor: a magnetometer sample has arrived
+  /// Per segment: its sensor's filter has a heading frame of its own (6D, or no magnetometer).
+  std::array<bool, kSegmentCount> own_heading_frames() const;
   int64_t heading_applied_t_ns_ = 0;
   void start_heading_from_motion(const CalibrationResult& r);
   void apply_heading_from_motion(int64_t t_ns);

@@ -100,12 +100,13 @@ struct CalibratorOptions {
   /// mount_normals: the outward normal of each segment's sensor site in the body frame (in the
   /// calibration pose); zero = unknown (segment not used for the heading).
   std::array<Eigen::Vector3d, kSegmentCount> mount_normal_body{};
-  /// 6D rigs: each sensor's filter has a heading frame of its own (no magnetometer). With
-  /// mount_normals every sensor's heading is then aligned on its own from its site's normal
-  /// (q_correction); a segment whose site normal is near vertical (head, feet) takes the
-  /// alignment of the nearest segment above it that has one (the body tracker then finds its
-  /// own from motion, rig/heading_from_motion.hpp).
-  bool independent_headings = false;
+  /// Segments whose sensor's filter has a heading frame of its own (no magnetometer: 6D rigs,
+  /// or a sensor that sends none). With mount_normals each such sensor's heading is aligned on
+  /// its own from its site's normal (q_correction) onto the body heading the others agree on (0
+  /// when none has a magnetometer); such a segment whose site normal is near vertical (head,
+  /// feet) takes the alignment of the nearest such segment above it that has one (the body
+  /// tracker then finds its own from motion, rig/heading_from_motion.hpp).
+  std::array<bool, kSegmentCount> own_heading_frame{};
 };
 
 enum class CalibrationStatus : uint8_t {
@@ -124,8 +125,8 @@ struct CalibrationResult {
   /// of the normal against the pose's, degrees (-1: not observable). Reported, not refused: a
   /// constant offset does not change the tracked motion.
   std::array<double, kSegmentCount> pose_deviation_deg{};
-  /// independent_headings: the segment's heading alignment came from its own site normal; false
-  /// where it was borrowed from a segment above (head, feet), to be found from motion.
+  /// own_heading_frame segments: the heading alignment came from the segment's own site normal;
+  /// false where it was borrowed from a segment above (head, feet), to be found from motion.
   std::array<bool, kSegmentCount> heading_from_own_normal{};
   std::string message;  ///< human-readable verdict naming the offending segments
   bool ok() const { return status == CalibrationStatus::ok; }
@@ -150,6 +151,10 @@ class Calibrator {
   /// Ends the capture and evaluates it.
   CalibrationResult finish();
   const CalibratorOptions& options() const { return opt_; }
+  /// Which segments' sensors have a heading frame of their own (set before a capture ends).
+  void set_own_heading_frames(const std::array<bool, kSegmentCount>& own) {
+    opt_.own_heading_frame = own;
+  }
 
  private:
   struct Accum {
