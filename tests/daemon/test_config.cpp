@@ -459,3 +459,82 @@ TEST(Config, BodyErrorsNameTheirFileAndLine) {
             std::string::npos)
       << errs.to_string();
 }
+
+// Issue 22 item 10: UTF-8 in comments and strings loads (config, body and limits files) and the
+// names survive --print-config; invalid UTF-8, and non-ASCII outside strings and comments (where
+// toml++ 3.3 has undefined behaviour), are refused with file:line:column.
+TEST(Config, Utf8NamesAndCommentsLoadAndRoundTrip) {
+  const std::string body = write_file("body-utf8.toml",
+                                      "# mod\xC3\xA8le du corps \xE2\x80\x94 Jos\xC3\xA9\n"
+                                      "height_m = 1.71 # taille mesur\xC3\xA9"
+                                      "e\n");
+  const std::string limits = write_file(
+      "limits-utf8.toml", "# genou gauche\n[joint.elbow_r] # coude\nb_deg = [-170, 0]\n");
+  const std::string text =
+      "# Rig de Jos\xC3\xA9 \xE2\x80\x94 capteurs \xC3\xA0 l'\xC3\xA9paule\n"
+      "[[sensor]]\n"
+      "name = \"Jos\xC3\xA9\" # \xC3\xA9tiquette\n"
+      "driver = \"witmotion\"\n"
+      "port = \"/dev/ttyUSB0\"\n"
+      "segment = \"torso\"\n"
+      "[[sensor]]\n"
+      "name = 'bassin-\xE2\x82\xAC' # capteur du bassin\n"
+      "driver = \"witmotion\"\n"
+      "port = \"/dev/serial/by-id/capteur du bassin \xC3\xA9\"\n"
+      "segment = \"pelvis\"\n"
+      "[body]\nmodel = \"" +
+      body + "\"\njoint_limits = \"" + limits + "\"\n";
+  ConfigErrors errs;
+  auto c = parse(text, errs);
+  ASSERT_TRUE(c) << errs.to_string();
+  ASSERT_EQ(c->sensors.size(), 2u);
+  EXPECT_EQ(c->sensors[0].name, "Jos\xC3\xA9");
+  EXPECT_EQ(c->sensors[1].name, "bassin-\xE2\x82\xAC");
+  EXPECT_DOUBLE_EQ(c->body.model.height_m, 1.71);
+  // --print-config prints config_to_toml; it parses back with the same names.
+  const std::string printed = config_to_toml(*c);
+  EXPECT_NE(printed.find("Jos\xC3\xA9"), std::string::npos) << printed;
+  auto c2 = parse_config(printed, "printed", {}, errs);
+  ASSERT_TRUE(c2) << errs.to_string() << printed;
+  EXPECT_EQ(c2->sensors[0].name, "Jos\xC3\xA9");
+  EXPECT_EQ(c2->sensors[1].name, "bassin-\xE2\x82\xAC");
+  EXPECT_EQ(c2->sensors[1].port, "/dev/serial/by-id/capteur du bassin \xC3\xA9");
+  // --set addresses a sensor by its UTF-8 name and takes a UTF-8 value (bare or quoted).
+  auto c3 =
+      parse(text, errs, {"sensor.Jos\xC3\xA9.port=/dev/pts/\xC3\xA9", "daemon.log_level=info"});
+  ASSERT_TRUE(c3) << errs.to_string();
+  EXPECT_EQ(c3->sensors[0].port, "/dev/pts/\xC3\xA9");
+  std::filesystem::remove(body);
+  std::filesystem::remove(limits);
+}
+
+TEST(Config, InvalidUtf8IsRefusedWithItsPosition) {
+  struct Case {
+    std::string text;
+    int line, column;
+    std::string what;
+  };
+  const Case cases[] = {
+      {"[pipeline]\n# ok \xC3\xA9\nrate_hz = 200 # \xFF\n", 3, 17, "invalid UTF-8 lead byte"},
+      {"[[sensor]]\nname = \"Jos\xC3\"\n", 2, 12, "invalid UTF-8 continuation byte"},
+      {"a = 1\n\n# \xC0\xAF\n", 3, 3, "overlong UTF-8 sequence"},
+      {"# x\nname = \"\xED\xA0\x80\"\n", 2, 9, "UTF-8 encoded surrogate"},
+      {"[pipeline]\nrate_hz = 200\xCF\x8F\n", 2, 14,
+       "non-ASCII character outside a string or comment"},
+  };
+  for (const auto& c : cases) {
+    ConfigErrors errs;
+    EXPECT_FALSE(parse(c.text, errs)) << c.what;
+    ASSERT_EQ(errs.errors.size(), 1u) << c.what;
+    EXPECT_EQ(errs.errors[0].to_string(),
+              "rig.toml:" + std::to_string(c.line) + ":" + std::to_string(c.column) + ": " + c.what)
+        << c.what;
+  }
+  // A body file with invalid UTF-8 names that file and position.
+  const std::string body = write_file("body-bad-utf8.toml", "height_m = 1.8\n# caf\xC3\n");
+  ConfigErrors errs;
+  EXPECT_FALSE(parse("[body]\nmodel = \"" + body + "\"\n", errs));
+  EXPECT_NE(errs.to_string().find(body), std::string::npos) << errs.to_string();
+  EXPECT_NE(errs.to_string().find("line 2, column 6"), std::string::npos) << errs.to_string();
+  std::filesystem::remove(body);
+}

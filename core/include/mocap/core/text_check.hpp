@@ -20,9 +20,16 @@ struct TextProblem {
 
 /// The first NUL byte or invalid UTF-8 sequence (overlong, surrogate, beyond U+10FFFF,
 /// truncated), or nullopt if the text is clean. With ascii_only, any non-ASCII character is a
-/// problem too: toml++ 3.3 reaches __builtin_unreachable on valid code points such as U+03CF
-/// after a value, so TOML text is restricted to ASCII (found by fuzzing).
+/// problem too.
 std::optional<TextProblem> text_problem(std::string_view text, bool ascii_only = false);
+
+/// What every TOML text goes through before toml++: text_problem (NUL, invalid UTF-8), then a
+/// lexical scan that allows non-ASCII characters only inside comments and strings (basic,
+/// literal, multi-line; quoted keys are strings). Outside them TOML 1.0 allows only ASCII, and
+/// there toml++ 3.3 reaches __builtin_unreachable on some valid code points (U+03CF after a
+/// bare value, found by fuzzing: tests/fuzz/corpus/config/regression-toml-non-ascii-after-value),
+/// so such a character is reported at its position and never reaches toml++.
+std::optional<TextProblem> toml_text_problem(std::string_view text);
 
 /// `s` without leading and trailing spaces and tabs.
 constexpr std::string_view trim_blanks(std::string_view s) {
