@@ -354,11 +354,16 @@ bool valid_axis_remap(std::string_view s) {
   return count == 3;
 }
 
+// A sensor name: 1-23 bytes (the 24-byte NUL-padded field of pose records) of ASCII letters,
+// digits, '_', '-' or non-ASCII UTF-8 characters ("Jos\u00e9"; the whole text was checked as
+// UTF-8 before parsing, and 23 bytes never cut a character: longer names are refused). No
+// spaces: control commands address a sensor by its name as one word.
 bool valid_sensor_name(std::string_view s) {
   if (s.empty() || s.size() > 23) return false;
+  if (text_problem(s)) return false;
   return std::all_of(s.begin(), s.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
-           c == '-';
+           c == '-' || static_cast<unsigned char>(c) >= 0x80;
   });
 }
 
@@ -405,7 +410,8 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
   };
   const std::string p = r.path();
   if (!valid_sensor_name(s.name))
-    ctx.add(at("name"), p + ".name", "needs a name of 1-23 letters, digits, '_' or '-'");
+    ctx.add(at("name"), p + ".name",
+            "needs a name of 1-23 bytes: letters (UTF-8 too), digits, '_' or '-'");
   if (s.driver.empty()) ctx.add(at("driver"), p + ".driver", "needs a driver (protocol name)");
   const bool has_ids = s.vid >= 0 || s.pid >= 0;
   if (has_ids && (s.vid < 0 || s.pid < 0))
@@ -697,11 +703,19 @@ void apply_override(toml::table& root, const std::string& kv, Ctx& ctx) {
   // Parse VALUE as TOML; a bare word becomes a string.
   toml::table parsed;
   const std::string src = "--set " + key;
-  if (const auto bad = text_problem(value, /*ascii_only=*/true))
+  if (const auto bad = text_problem(value))
     return ctx.add(nullptr, key, "--set: bad value: " + bad->what);
-  try {
-    parsed = toml::parse("v = " + value, src);
-  } catch (const toml::parse_error&) {
+  // VALUE as TOML if it is (non-ASCII only in its strings: toml_text_problem), else quoted.
+  const std::string as_toml = "v = " + value;
+  bool as_is = !toml_text_problem(as_toml);
+  if (as_is) {
+    try {
+      parsed = toml::parse(as_toml, src);
+    } catch (const toml::parse_error&) {
+      as_is = false;
+    }
+  }
+  if (!as_is) {
     try {
       parsed = toml::parse("v = " + toml_quote(value), src);
     } catch (const toml::parse_error& e) {
@@ -754,7 +768,7 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
                                  " bytes, over the 1 MiB limit; not read"});
     return std::nullopt;
   }
-  if (const auto bad = text_problem(toml_text, /*ascii_only=*/true)) {
+  if (const auto bad = toml_text_problem(toml_text)) {
     ConfigError err;
     err.file = std::string(source_name);
     err.line = static_cast<int>(bad->line);

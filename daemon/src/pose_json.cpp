@@ -10,6 +10,33 @@
 namespace mocap::daemon {
 namespace {
 
+/// Length of the well-formed UTF-8 sequence (RFC 3629: no overlong form, surrogate or code
+/// point beyond U+10FFFF) starting at s, within n bytes; 0 if there is none.
+std::size_t utf8_sequence(const char* s, std::size_t n) {
+  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+  const unsigned char c = b(0);
+  std::size_t len = 0;
+  unsigned char lo = 0x80, hi = 0xBF;  // the range of the second byte
+  if (c >= 0xC2 && c <= 0xDF) {
+    len = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    len = 3;
+    if (c == 0xE0) lo = 0xA0;
+    if (c == 0xED) hi = 0x9F;
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    len = 4;
+    if (c == 0xF0) lo = 0x90;
+    if (c == 0xF4) hi = 0x8F;
+  } else {
+    return 0;
+  }
+  if (len > n) return 0;
+  if (b(1) < lo || b(1) > hi) return 0;
+  for (std::size_t k = 2; k < len; ++k)
+    if (b(k) < 0x80 || b(k) > 0xBF) return 0;
+  return len;
+}
+
 class LineOut {
  public:
   LineOut(char* begin, std::size_t cap) : p_(begin), end_(begin + cap) {}
@@ -49,7 +76,8 @@ class LineOut {
     p_ = r.ptr;
   }
   /// A JSON string from at most max_len bytes (stops at NUL). Control characters are escaped;
-  /// bytes outside ASCII become '?' so the line stays valid UTF-8 whatever a device reported.
+  /// well-formed UTF-8 sequences (a sensor named "Jos\u00e9") are copied, any other byte outside
+  /// ASCII becomes '?', so the line stays valid UTF-8 whatever a device reported.
   void str(const char* s, std::size_t max_len) {
     put('"');
     for (std::size_t i = 0; i < max_len && s[i] != '\0'; ++i) {
@@ -63,7 +91,13 @@ class LineOut {
         put(kHex[c >> 4]);
         put(kHex[c & 15]);
       } else if (c >= 0x80) {
-        put('?');
+        const std::size_t n = utf8_sequence(s + i, max_len - i);
+        if (n == 0) {
+          put('?');
+        } else {
+          put(std::string_view(s + i, n));
+          i += n - 1;
+        }
       } else {
         put(static_cast<char>(c));
       }

@@ -43,7 +43,7 @@ std::string read_file(const std::string& path, std::string_view what) {
 }
 
 toml::table parse(std::string_view text, std::string_view source) {
-  if (const auto bad = text_problem(text, /*ascii_only=*/true))
+  if (const auto bad = toml_text_problem(text))
     throw std::runtime_error(std::string(source) + ": " + bad->to_string());
   try {
     return toml::parse(text, source);

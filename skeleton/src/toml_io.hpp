@@ -15,7 +15,8 @@ namespace mocap::skeleton_toml {
 [[noreturn]] void fail(std::string_view source, const toml::source_region& r,
                        const std::string& what);
 
-/// Checks the text (ASCII, no NUL: core/text_check.hpp) and parses it; throws with the
+/// Checks the text (valid UTF-8, no NUL, non-ASCII only in strings and comments:
+/// toml_text_problem in core/text_check.hpp) and parses it; throws with the
 /// position of the first problem.
 toml::table parse(std::string_view text, std::string_view source);
 

@@ -48,3 +48,48 @@ TEST(TextCheck, AsciiOnlyRejectsValidNonAscii) {
 }
 
 }  // namespace mocap
+
+namespace mocap {
+
+TEST(TomlTextCheck, NonAsciiInStringsAndCommentsPasses) {
+  EXPECT_FALSE(
+      toml_text_problem("# capteur du bassin \xE2\x80\x94 Jos\xC3\xA9\n"
+                        "name = \"Jos\xC3\xA9\" # \xC3\xA9t\xC3\xA9\n"
+                        "\"cl\xC3\xA9\" = 'capteur du bassin \xE2\x82\xAC'\n"
+                        "a = \"\"\"x \xCF\x8F \\\" \"\"\"\"\" # \xCF\x8F\n"
+                        "b = '''y\n\xCF\x8F'''\n"
+                        "c = \"esc \\\\\" # \xCF\x8F after an escaped backslash\n"));
+}
+
+TEST(TomlTextCheck, NonAsciiOutsideStringsIsRefusedAtItsPosition) {
+  struct Case {
+    std::string text;
+    std::size_t line, column;
+  };
+  const Case cases[] = {
+      {"a = 1\nb = 2\xCF\x8F\n", 2, 6},            // the toml++ 3.3 fuzz finding
+      {"n = \"Jos\xC3\xA9\" \xC3\xA9\n", 1, 12},   // after a closed string (column in code points)
+      {"Jos\xC3\xA9 = 1\n", 1, 4},                 // bare key
+      {"s = \"open\nx = \xC3\xA9\n", 2, 5},        // a single-line string ends at the newline
+      {"m = \"\"\"a\"\"\"\"\"\xC3\xA9\n", 1, 14},  // five closing quotes end the string
+      {"#set semo zhz=2is_rema\xCF\x8F\xC2\x81z=2\n", 0, 0},  // in a comment: fine
+  };
+  for (const auto& c : cases) {
+    const auto p = toml_text_problem(c.text);
+    if (c.line == 0) {
+      EXPECT_FALSE(p) << c.text;
+      continue;
+    }
+    ASSERT_TRUE(p.has_value()) << c.text;
+    EXPECT_EQ(p->line, c.line) << c.text;
+    EXPECT_EQ(p->column, c.column) << c.text;
+    EXPECT_EQ(p->what, "non-ASCII character outside a string or comment");
+  }
+  // Invalid UTF-8 is still refused first, even inside a string.
+  const auto bad = toml_text_problem("n = \"Jos\xC3(\"\n");
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->what, "invalid UTF-8 continuation byte");
+  EXPECT_EQ(bad->column, 9u);
+}
+
+}  // namespace mocap

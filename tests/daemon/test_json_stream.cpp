@@ -165,6 +165,20 @@ TEST(PoseJson, NonFiniteAndHostileNamesStayValidJson) {
   EXPECT_TRUE(j["sensors"][0]["segment"].is_null());
 }
 
+// UTF-8 sensor names (config files may hold them) reach the stream whole; broken, overlong,
+// surrogate and truncated sequences still become '?'.
+TEST(PoseJson, Utf8NamesAreKeptAndBrokenSequencesReplaced) {
+  PoseFrame f = make_frame(1);
+  std::snprintf(f.sensors[0].name, sizeof f.sensors[0].name, "Jos\xC3\xA9-\xE2\x82\xAC");
+  std::snprintf(f.sensors[1].name, sizeof f.sensors[1].name, "a\xC3(\xC0\xAF\xED\xA0\x80z");
+  std::memset(f.sensors[2].name, 'x', sizeof f.sensors[2].name);
+  f.sensors[2].name[23] = '\xC3';  // a lead byte cut by the field's end
+  const json j = json::parse(format(f));
+  EXPECT_EQ(j["sensors"][0]["name"], "Jos\xC3\xA9-\xE2\x82\xAC");
+  EXPECT_EQ(j["sensors"][1]["name"], "a?(?????z");
+  EXPECT_EQ(j["sensors"][2]["name"], std::string(23, 'x') + "?");
+}
+
 TEST(PoseJson, FullRigFitsTheMaximumLineAndTooSmallBufferFailsCleanly) {
   PoseFrame f = make_frame(7);
   f.sensor_count = mocap::kMaxSensors;
