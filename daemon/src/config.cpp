@@ -10,7 +10,9 @@
 
 #include <toml++/toml.h>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -706,18 +708,20 @@ void apply_override(toml::table& root, const std::string& kv, Ctx& ctx) {
   if (const auto bad = text_problem(value))
     return ctx.add(nullptr, key, "--set: bad value: " + bad->what);
   // VALUE as TOML if it is (non-ASCII only in its strings: toml_text_problem), else quoted.
-  const std::string as_toml = "v = " + value;
-  bool as_is = !toml_text_problem(as_toml);
+  std::string ascii;  // what toml++ reads: non-ASCII only as escapes (text_check.hpp)
+  bool as_is = !toml_text_problem("v = " + value, &ascii);
   if (as_is) {
     try {
-      parsed = toml::parse(as_toml, src);
+      parsed = toml::parse(ascii, src);
     } catch (const toml::parse_error&) {
       as_is = false;
     }
   }
   if (!as_is) {
     try {
-      parsed = toml::parse("v = " + toml_quote(value), src);
+      if (toml_text_problem("v = " + toml_quote(value), &ascii))
+        return ctx.add(nullptr, key, "--set: bad value");
+      parsed = toml::parse(ascii, src);
     } catch (const toml::parse_error& e) {
       return ctx.add(nullptr, key,
                      std::string("--set: bad value: ") + std::string(e.description()));
@@ -768,7 +772,8 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
                                  " bytes, over the 1 MiB limit; not read"});
     return std::nullopt;
   }
-  if (const auto bad = toml_text_problem(toml_text)) {
+  std::string ascii;  // what toml++ reads: non-ASCII only as escapes (text_check.hpp)
+  if (const auto bad = toml_text_problem(toml_text, &ascii)) {
     ConfigError err;
     err.file = std::string(source_name);
     err.line = static_cast<int>(bad->line);
@@ -778,7 +783,7 @@ std::optional<Config> parse_config(std::string_view toml_text, std::string_view 
     return std::nullopt;
   }
   try {
-    root = toml::parse(toml_text, source_name);
+    root = toml::parse(ascii, source_name);
   } catch (const toml::parse_error& e) {
     ConfigError err;
     err.file = std::string(source_name);
@@ -862,6 +867,12 @@ toml::table body_to_toml(const BodyConfig& b) {
 
 }  // namespace
 
+std::optional<Config> with_overrides(const Config& c, const std::vector<std::string>& sets,
+                                     std::string_view source_name, ConfigErrors& errors) {
+  if (sets.empty()) return c;
+  return parse_config(config_to_toml(c), source_name, sets, errors);
+}
+
 std::string config_to_toml(const Config& c) {
   toml::table root;
   root.insert("daemon", toml::table{{"log_level", c.daemon.log_level},
@@ -873,13 +884,23 @@ std::string config_to_toml(const Config& c) {
   {
     toml::table f{{"use_mag", c.filter.use_mag}};
     for (const auto& [k, v] : c.filter.params) {
-      // Values were numbers or booleans: print them back as such.
+      // Values were numbers or booleans: print them back as such (anything else, which only an
+      // unvalidated config can hold, as a string).
+      char* end = nullptr;
+      errno = 0;
+      const long long n = std::strtoll(v.c_str(), &end, 10);
+      const bool is_int = !v.empty() && end && *end == '\0' && errno == 0;
+      errno = 0;
+      const double d = std::strtod(v.c_str(), &end);
+      const bool is_num = !v.empty() && end && *end == '\0' && errno == 0;
       if (v == "true" || v == "false")
         f.insert(k, v == "true");
-      else if (v.find_first_of(".eEnN") == std::string::npos)
-        f.insert(k, std::stoll(v));
+      else if (is_int)
+        f.insert(k, n);
+      else if (is_num)
+        f.insert(k, d);
       else
-        f.insert(k, std::stod(v));
+        f.insert(k, v);
     }
     root.insert("filter", std::move(f));
   }

@@ -45,12 +45,21 @@ Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log) {
   return parts;
 }
 
-int run_replay_daemon(const std::string& path, double speed, const Config* rig, int signal_fd,
-                      Logger& log) {
+int run_replay_daemon(const std::string& path, double speed, const Config* rig,
+                      const std::vector<std::string>& sets, int signal_fd, Logger& log) {
   try {
     std::unique_ptr<SampleSource> src =
         std::make_unique<PrefetchSource>(open_sample_source(path, rig));
     Config cfg = src->config();
+    if (!rig) {
+      ConfigErrors errs;
+      std::optional<Config> changed = with_overrides(cfg, sets, path + " (configuration)", errs);
+      if (!changed) {
+        log.error("%s", errs.to_string().c_str());
+        return 1;
+      }
+      cfg = *changed;
+    }
     // A replay uses the session's own calibration and never writes the live calibration file.
     cfg.calibration.file.clear();
     RigEngine engine(cfg, &log);

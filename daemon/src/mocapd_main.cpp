@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "mocapd: --speed needs a number >= 0\n");
       return 2;
     }
-    return run_replay_daemon(*replay, speed, args.has("config") ? &*cfg : nullptr, sfd, log);
+    return run_replay_daemon(*replay, speed, args.has("config") ? &*cfg : nullptr, sets, sfd, log);
   }
 
   // One instance per runtime directory: the lock comes before any device, port or shared

@@ -43,10 +43,11 @@ std::string read_file(const std::string& path, std::string_view what) {
 }
 
 toml::table parse(std::string_view text, std::string_view source) {
-  if (const auto bad = toml_text_problem(text))
+  std::string ascii;  // what toml++ reads: non-ASCII only as escapes (text_check.hpp)
+  if (const auto bad = toml_text_problem(text, &ascii))
     throw std::runtime_error(std::string(source) + ": " + bad->to_string());
   try {
-    return toml::parse(text, source);
+    return toml::parse(ascii, source);
   } catch (const toml::parse_error& e) {
     fail(source, e.source(), std::string(e.description()));
   }

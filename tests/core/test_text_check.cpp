@@ -73,6 +73,11 @@ TEST(TomlTextCheck, NonAsciiOutsideStringsIsRefusedAtItsPosition) {
       {"s = \"open\nx = \xC3\xA9\n", 2, 5},        // a single-line string ends at the newline
       {"m = \"\"\"a\"\"\"\"\"\xC3\xA9\n", 1, 14},  // five closing quotes end the string
       {"#set semo zhz=2is_rema\xCF\x8F\xC2\x81z=2\n", 0, 0},  // in a comment: fine
+      // A quote where no string may start is part of a bare value for toml++ (libFuzzer
+      // finding: `name =0"Jos\xC3\xA9"` reached toml++'s undefined whitespace test).
+      {"name =0\"Jos\xC3\xA9\"\n", 1, 12},
+      {"x = \"a\" \"\xC3\xA9\"\n", 1, 10},
+      {"[t]\nk = [\"a\", \"\xC3\xA9\"]\nv = {a = \"\xC3\xA9\"}\n[u.\"\xC3\xA9\"]\n", 0, 0},
   };
   for (const auto& c : cases) {
     const auto p = toml_text_problem(c.text);
@@ -92,4 +97,26 @@ TEST(TomlTextCheck, NonAsciiOutsideStringsIsRefusedAtItsPosition) {
   EXPECT_EQ(bad->column, 9u);
 }
 
+}  // namespace mocap
+
+namespace mocap {
+namespace {
+
+// What toml++ reads: the same document in ASCII (strings' non-ASCII as escapes, literal strings
+// as basic ones, comments' as '?'), so no non-ASCII byte reaches toml++ even where the scan and
+// toml++ disagree on what a string is (libFuzzer: `v = 2x='''...`).
+TEST(TomlTextCheck, TomlPlusPlusReadsAsciiOnly) {
+  std::string out;
+  ASSERT_FALSE(
+      toml_text_problem("a = 'x\\\"\xC3\xA9' # \xC3\xA9\nb = \"\xF0\x9F\x98\x80\"\n"
+                        "c = '''\xC3\xA9'''\n",
+                        &out));
+  EXPECT_EQ(out, "a = \"x\\\\\\\"\\u00E9\" # ?\nb = \"\\U0001F600\"\nc = \"\"\"\\u00E9\"\"\"\n");
+  const std::string fuzzed = "v = 2is_reme~z='''2=hz00s\xC3\xA9 t=/dev/pts/1\n";
+  if (!toml_text_problem(fuzzed, &out))
+    for (char ch : out)
+      EXPECT_LT(static_cast<unsigned char>(ch), 0x80) << out;
+}
+
+}  // namespace
 }  // namespace mocap

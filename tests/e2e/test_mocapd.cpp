@@ -559,3 +559,28 @@ TEST(Score, ReplayOfARealClipIsScoredAgainstItsTruth) {
 }
 
 }  // namespace
+
+namespace {
+
+// `mocapd --replay SESSION --set K=V` without --config changes the recorded configuration (it
+// was silently ignored): the recorded session had no JSON stream; it comes on the port given.
+TEST(Mocapd, ReplaySetWithoutConfigChangesTheRecordedConfiguration) {
+  const std::string session = std::string(MOCAP_SOURCE_DIR) + "/tests/data/demo_direct_50hz.mcap";
+  const uint16_t port = free_port();
+  const pid_t d =
+      spawn({kBin + "mocapd", "--replay", session, "--speed", "1", "--set",
+             "outputs.json.enabled=true", "--set", "outputs.json.port=" + std::to_string(port),
+             "--set", "outputs.posture.shm_name=/mocap-e2e-replay-" + std::to_string(getpid())},
+            (fs::temp_directory_path() / ("mocap-e2e-replay-" + std::to_string(getpid()) + ".log"))
+                .string());
+  std::vector<nlohmann::json> lines;
+  for (int i = 0; i < 50 && lines.empty(); ++i) {  // until the daemon listens
+    std::this_thread::sleep_for(100ms);
+    lines = read_lines(port, 5);
+  }
+  EXPECT_EQ(lines.size(), 5u);
+  kill(d, SIGTERM);
+  EXPECT_GE(wait_exit(d), 0);
+}
+
+}  // namespace

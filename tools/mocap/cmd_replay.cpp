@@ -133,12 +133,11 @@ int run_replay(int argc, char** argv) {
     // Read and decode the file on the other core while this one filters and solves.
     src = std::make_unique<PrefetchSource>(std::move(src));
     Config cfg = src->config();
-    if (!rig && !sets.empty()) {
+    if (!rig) {
       // --set without --rig: applied to the input's own configuration (recorded, or the
       // segment-named sensors of a CSV).
       ConfigErrors errs;
-      std::optional<Config> with_sets =
-          parse_config(config_to_toml(cfg), input + " (configuration)", sets, errs);
+      std::optional<Config> with_sets = with_overrides(cfg, sets, input + " (configuration)", errs);
       if (!with_sets) {
         std::fprintf(stderr, "%s", errs.to_string().c_str());
         return 1;

@@ -31,8 +31,12 @@ std::optional<TextProblem> text_problem(std::string_view text, bool ascii_only =
 /// it reaches TOML_UNREACHABLE (found by fuzzing a --set value:
 /// tests/fuzz/corpus/config/regression-toml-non-ascii-after-value). Such a character is reported
 /// at its position and never reaches toml++. Inside strings and comments toml++ does not call it
-/// (every code point checked under UBSan: tests/daemon/test_config.cpp).
-std::optional<TextProblem> toml_text_problem(std::string_view text);
+/// (every code point checked under UBSan: tests/daemon/test_config.cpp). With `ascii`, it also
+/// receives the text to give toml++ instead: the same document with every non-ASCII character
+/// of a string as a \\u/\\U escape (literal strings passed on as basic ones) and of a comment
+/// as '?', so that toml++ never meets a non-ASCII byte, even where this scan and toml++ disagree
+/// on what is a string (libFuzzer findings: a quote inside a bare value).
+std::optional<TextProblem> toml_text_problem(std::string_view text, std::string* ascii = nullptr);
 
 /// `s` without leading and trailing spaces and tabs.
 constexpr std::string_view trim_blanks(std::string_view s) {

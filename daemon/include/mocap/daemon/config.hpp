@@ -213,6 +213,10 @@ std::optional<Config> load_config(const std::string& path,
                                   const ConfigValidators* validators = nullptr);
 /// The effective configuration (defaults included) as TOML text that parse_config accepts.
 std::string config_to_toml(const Config& c);
+/// `c` with KEY=VALUE overrides applied (as --set does to a file): a recorded or derived
+/// configuration changed from the command line. nullopt with the problems in `errors`.
+std::optional<Config> with_overrides(const Config& c, const std::vector<std::string>& sets,
+                                     std::string_view source_name, ConfigErrors& errors);
 
 /// Levenshtein distance (for "did you mean" suggestions).
 int edit_distance(std::string_view a, std::string_view b);

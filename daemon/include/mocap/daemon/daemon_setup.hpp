@@ -17,8 +17,9 @@ Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log);
 
 /// `mocapd --replay FILE --speed X`: plays the session through the pipeline to the configured
 /// outputs (frames flagged kFrameReplay), stopping early when signal_fd becomes readable.
-/// rig: replaces the recorded config if given. Returns the exit code.
-int run_replay_daemon(const std::string& path, double speed, const Config* rig, int signal_fd,
-                      Logger& log);
+/// rig: replaces the recorded config if given; otherwise `sets` (KEY=VALUE) change the recorded
+/// one. Returns the exit code.
+int run_replay_daemon(const std::string& path, double speed, const Config* rig,
+                      const std::vector<std::string>& sets, int signal_fd, Logger& log);
 
 }  // namespace mocap::daemon
