@@ -26,7 +26,8 @@ std::vector<rig::TrackerSensor> tracker_sensors(const Config& cfg) {
     rig::TrackerSensor t;
     if (auto seg = segment_from_name(s.segment)) t.segment = index(*seg);
     if (const auto& g = s.gyr_scale) t.gyr_scale = Eigen::Vector3d((*g)[0], (*g)[1], (*g)[2]);
-    if (const auto& n = s.site_normal) t.site_normal_body = Eigen::Vector3d((*n)[0], (*n)[1], (*n)[2]);
+    if (const auto& n = s.site_normal)
+      t.site_normal_body = Eigen::Vector3d((*n)[0], (*n)[1], (*n)[2]);
     out.push_back(t);
   }
   return out;

@@ -11,11 +11,7 @@ namespace mocap {
 
 Skeleton::Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping rig,
                    SkeletonOptions options)
-    : model_(model),
-      limits_(limits),
-      rig_(rig),
-      opt_(options),
-      root_(model, options.root) {
+    : model_(model), limits_(limits), rig_(rig), opt_(options), root_(model, options.root) {
   validate(limits_);
   q_es_.fill(Eigen::Quaterniond::Identity());
   q_earth_.fill(Eigen::Quaterniond::Identity());

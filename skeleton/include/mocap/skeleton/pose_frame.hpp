@@ -21,8 +21,8 @@ enum SegmentFlag : uint32_t {
   kSegMagDisturbed = 1u << 3,   ///< its sensor's magnetometer is rejected as disturbed
   kSegLimitViolated = 1u << 4,  ///< its joint (to the parent) is outside the limits
   // 1u << 5 is free (it meant "clamped" while joint limits could be imposed).
-  kSegAtRest = 1u << 6,         ///< its sensor is at rest
-  kSegStance = 1u << 7,         ///< foot segments: this foot is the stance foot
+  kSegAtRest = 1u << 6,  ///< its sensor is at rest
+  kSegStance = 1u << 7,  ///< foot segments: this foot is the stance foot
   /// Its sensor's filter has not accepted a reference field yet (start-up): the heading follows
   /// the magnetometer provisionally. Not the same as kSegMagDisturbed (field rejected).
   kSegMagNoReference = 1u << 8,

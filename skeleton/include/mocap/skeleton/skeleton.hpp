@@ -2,11 +2,12 @@
 // (PoseFrame) out. Forward kinematics as in the thesis's Figure 29: each segment's orientation
 // comes from its own sensor through the calibration (q_correction q_earth_sensor
 // q_sensor_segment, nothing else: a segment is never worse than its own sensor's filter);
-// positions follow the parent chain by the joint offsets; segments without a sensor are interpolated between tracked neighbours
-// along their chain (e.g. torso between pelvis and neck) or follow their parent. Joint rotations
-// are checked against swing-twist/hinge limits and violations reported per joint, never clamped
-// (real people exceed textbook ranges: docs/skeleton.md); the root moves with the stance foot or
-// is pinned. The solve never changes the calibration; only set_calibration and reset_heading do.
+// positions follow the parent chain by the joint offsets; segments without a sensor are
+// interpolated between tracked neighbours along their chain (e.g. torso between pelvis and neck) or
+// follow their parent. Joint rotations are checked against swing-twist/hinge limits and violations
+// reported per joint, never clamped (real people exceed textbook ranges: docs/skeleton.md); the
+// root moves with the stance foot or is pinned. The solve never changes the calibration; only
+// set_calibration and reset_heading do.
 //
 // Per-frame work (set_sensor_orientation, solve) never allocates, and is deterministic: identical
 // inputs give bit-identical frames.
