@@ -1,7 +1,13 @@
 // OSC 1.0 message and bundle encoding into fixed buffers (big-endian numbers, padded strings).
 #include "mocap/daemon/osc.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <bit>
+#include <cerrno>
 #include <cstring>
 
 namespace mocap::daemon::osc {
@@ -63,6 +69,35 @@ bool BundleWriter::add(const uint8_t* message, std::size_t size) {
   len_ += size + 4;
   ++count_;
   return true;
+}
+
+UdpTarget::~UdpTarget() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool UdpTarget::open(const std::string& host, uint16_t port, std::string_view who,
+                     std::string* error) {
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(port);
+  if (inet_pton(AF_INET, host.c_str(), &a.sin_addr) != 1) {
+    if (error) *error = std::string(who) + ": target address '" + host + "' is not an IPv4 address";
+    return false;
+  }
+  static_assert(sizeof(sockaddr_in) <= sizeof addr_);
+  std::memcpy(addr_, &a, sizeof a);
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd_ < 0) {
+    if (error) *error = std::string(who) + ": cannot create UDP socket: " + std::strerror(errno);
+    return false;
+  }
+  return true;
+}
+
+bool UdpTarget::send(const void* data, std::size_t size) const noexcept {
+  return fd_ >= 0 && ::sendto(fd_, data, size, MSG_DONTWAIT | MSG_NOSIGNAL,
+                              reinterpret_cast<const sockaddr*>(addr_), sizeof(sockaddr_in)) >= 0;
 }
 
 }  // namespace mocap::daemon::osc

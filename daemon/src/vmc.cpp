@@ -118,34 +118,16 @@ bool vmc_pose_from_frame(const PoseFrame& f, VmcPose& out) noexcept {
   return true;
 }
 
-VmcSender::~VmcSender() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
 bool VmcSender::open(const Options& options, std::string* error) {
   options_ = options;
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(options.port);
-  if (inet_pton(AF_INET, options.host.c_str(), &a.sin_addr) != 1) {
-    if (error) *error = "VMC: target address '" + options.host + "' is not an IPv4 address";
-    return false;
-  }
-  static_assert(sizeof(sockaddr_in) <= sizeof addr_);
-  std::memcpy(addr_, &a, sizeof a);
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (fd_ < 0) {
-    if (error) *error = std::string("VMC: cannot create UDP socket: ") + std::strerror(errno);
-    return false;
-  }
+  if (!udp_.open(options.host, options.port, "VMC", error)) return false;
   bundle_cap_ = std::clamp<std::size_t>(options.max_datagram, 256, sizeof bundle_);
   sent_any_ = false;
   return true;
 }
 
 bool VmcSender::publish(const PoseFrame& frame) noexcept {
-  if (fd_ < 0) return false;
+  if (!udp_.is_open()) return false;
   if (sent_any_ && frame.t_ns - last_t_ns_ < int64_t{options_.min_interval_ms} * 1'000'000 &&
       frame.t_ns >= last_t_ns_) {
     ++stats_.frames_rate_limited;
@@ -165,9 +147,7 @@ bool VmcSender::publish(const PoseFrame& frame) noexcept {
   bool ok = true;
   auto send = [&] {
     if (bundle.empty()) return;
-    const ssize_t n = ::sendto(fd_, bundle.data(), bundle.size(), MSG_DONTWAIT | MSG_NOSIGNAL,
-                               reinterpret_cast<const sockaddr*>(addr_), sizeof(sockaddr_in));
-    if (n < 0) {
+    if (!udp_.send(bundle.data(), bundle.size())) {
       ++stats_.send_errors;
       ok = false;
     } else {

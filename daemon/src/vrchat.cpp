@@ -66,33 +66,15 @@ bool vrchat_tracker_from_frame(const PoseFrame& f, int s, double scale,
   return true;
 }
 
-VrchatSender::~VrchatSender() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
 bool VrchatSender::open(const Options& options, std::string* error) {
   options_ = options;
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(options.port);
-  if (inet_pton(AF_INET, options.host.c_str(), &a.sin_addr) != 1) {
-    if (error) *error = "VRChat: target address '" + options.host + "' is not an IPv4 address";
-    return false;
-  }
-  static_assert(sizeof(sockaddr_in) <= sizeof addr_);
-  std::memcpy(addr_, &a, sizeof a);
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (fd_ < 0) {
-    if (error) *error = std::string("VRChat: cannot create UDP socket: ") + std::strerror(errno);
-    return false;
-  }
+  if (!udp_.open(options.host, options.port, "VRChat", error)) return false;
   sent_any_ = false;
   return true;
 }
 
 bool VrchatSender::publish(const PoseFrame& frame) noexcept {
-  if (fd_ < 0) return false;
+  if (!udp_.is_open()) return false;
   if (sent_any_ && frame.t_ns - last_t_ns_ < int64_t{options_.min_interval_ms} * 1'000'000 &&
       frame.t_ns >= last_t_ns_) {
     ++stats_.frames_rate_limited;
@@ -120,9 +102,7 @@ bool VrchatSender::publish(const PoseFrame& frame) noexcept {
     osc::MessageWriter m(message_, sizeof message_);
     m.address(address).tags(",fff").f32(v[0]).f32(v[1]).f32(v[2]);
     if (!m.ok()) return;
-    const ssize_t n = ::sendto(fd_, message_, m.size(), MSG_DONTWAIT | MSG_NOSIGNAL,
-                               reinterpret_cast<const sockaddr*>(addr_), sizeof(sockaddr_in));
-    if (n < 0) {
+    if (!udp_.send(message_, m.size())) {
       ++stats_.send_errors;
       ok = false;
     } else {

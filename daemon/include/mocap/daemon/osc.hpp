@@ -4,9 +4,29 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <string_view>
 
 namespace mocap::daemon::osc {
+
+/// A non-blocking UDP socket aimed at one IPv4 host:port: the OSC senders' transport (VMC,
+/// VRChat).
+class UdpTarget {
+ public:
+  UdpTarget() = default;
+  ~UdpTarget();
+  UdpTarget(const UdpTarget&) = delete;
+  UdpTarget& operator=(const UdpTarget&) = delete;
+  /// (Re)opens the socket. False with "<who>: ..." in `error` for a bad address or socket.
+  bool open(const std::string& host, uint16_t port, std::string_view who, std::string* error);
+  bool is_open() const { return fd_ >= 0; }
+  /// Sends one datagram without blocking; false if it was not sent (lost).
+  bool send(const void* data, std::size_t size) const noexcept;
+
+ private:
+  int fd_ = -1;
+  unsigned char addr_[16] = {};  // sockaddr_in
+};
 
 /// Timetag meaning "immediately" (OSC 1.0).
 inline constexpr uint64_t kImmediate = 1;

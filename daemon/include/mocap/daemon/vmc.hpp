@@ -4,6 +4,8 @@
 // and sends Root/Pos, Bone/Pos, OK and T in bundles of at most 1500 bytes (docs/streaming.md).
 #pragma once
 
+#include "mocap/daemon/osc.hpp"
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -55,7 +57,6 @@ class VmcSender {
   };
 
   VmcSender() = default;
-  ~VmcSender();
   VmcSender(const VmcSender&) = delete;
   VmcSender& operator=(const VmcSender&) = delete;
 
@@ -68,8 +69,7 @@ class VmcSender {
 
  private:
   Options options_;
-  int fd_ = -1;
-  unsigned char addr_[16] = {};  // sockaddr_in
+  osc::UdpTarget udp_;
   int64_t last_t_ns_ = 0;
   int64_t first_t_ns_ = 0;
   bool sent_any_ = false;

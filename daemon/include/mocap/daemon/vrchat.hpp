@@ -4,6 +4,8 @@
 // degrees in Unity's order (Z, then X, then Y). docs/streaming.md section 3.
 #pragma once
 
+#include "mocap/daemon/osc.hpp"
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -56,7 +58,6 @@ class VrchatSender {
   };
 
   VrchatSender() = default;
-  ~VrchatSender();
   VrchatSender(const VrchatSender&) = delete;
   VrchatSender& operator=(const VrchatSender&) = delete;
 
@@ -69,8 +70,7 @@ class VrchatSender {
 
  private:
   Options options_;
-  int fd_ = -1;
-  unsigned char addr_[16] = {};  // sockaddr_in
+  osc::UdpTarget udp_;
   int64_t last_t_ns_ = 0;
   bool sent_any_ = false;
   uint8_t message_[128];
