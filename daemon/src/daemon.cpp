@@ -231,7 +231,6 @@ std::string Daemon::status_json() const {
   nlohmann::json sensors = nlohmann::json::array();
   for (uint32_t i = 0; i < st.frame.sensor_count && i < static_cast<uint32_t>(kMaxSensors); ++i) {
     const SensorStatus& s = st.frame.sensors[i];
-    const SensorFilterState& f = st.filter[i];
     nlohmann::json e;
     e["name"] = std::string(s.name, strnlen(s.name, sizeof s.name));
     e["segment"] = s.segment >= 0 ? std::string(kSegmentNames[s.segment]) : std::string();
@@ -248,10 +247,10 @@ std::string Daemon::status_json() const {
       e["implausible"] = ds.decoder.implausible;
       e["saturated"] = ds.decoder.saturated;
     }
-    e["at_rest"] = f.at_rest;
-    e["mag_disturbed"] = f.mag_disturbed;
-    e["mag_no_reference"] = f.mag_no_reference;
-    e["calibrated"] = f.calibrated;
+    e["at_rest"] = (s.flags & kSegAtRest) != 0;
+    e["mag_disturbed"] = (s.flags & kSegMagDisturbed) != 0;
+    e["mag_no_reference"] = (s.flags & kSegMagNoReference) != 0;
+    e["calibrated"] = (s.flags & kSegCalibrated) != 0;
     e["gyro_bias_dps"] = std::round(s.gyro_bias_dps * 1000) / 1000;
     e["heading_sigma_deg"] = std::round(s.heading_sigma_deg * 10) / 10;
     sensors.push_back(e);

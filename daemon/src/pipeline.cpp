@@ -187,8 +187,6 @@ void Pipeline::snapshot() {
   std::unique_lock lock(status_mu_, std::try_to_lock);
   if (!lock.owns_lock()) return;  // a status reader holds it: skip, next frame will do
   status_.frame = core_.last_frame();
-  for (size_t i = 0; i < core_.sensors().size(); ++i)
-    status_.filter[i] = core_.filter_state(static_cast<int>(i));
   status_.calibration = core_.calibration_progress();
   status_.samples = core_.samples_processed();
   status_.rejected = core_.rejected_samples();

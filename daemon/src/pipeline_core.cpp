@@ -162,11 +162,8 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
     st.rate_hz = h.live ? h.rate_hz : 0.f;
     st.drops = h.drops + h.gaps;
     st.errors = h.errors;
-    const SensorFilterState fs = engine_.sensor_state(static_cast<int>(i));
-    st.flags = static_cast<uint16_t>((fs.at_rest ? uint32_t{kSegAtRest} : 0u) |
-                                     (fs.mag_disturbed ? uint32_t{kSegMagDisturbed} : 0u) |
-                                     (fs.mag_no_reference ? uint32_t{kSegMagNoReference} : 0u) |
-                                     (h.live ? 0u : uint32_t{kSegStale}));
+    const SensorHealth fs = engine_.sensor_health(static_cast<int>(i));
+    st.flags = static_cast<uint16_t>(fs.segment_flags() | (h.live ? 0u : uint32_t{kSegStale}));
     st.gyro_bias_dps = static_cast<float>(fs.gyro_bias_rad_s * kDegPerRad);
     st.heading_sigma_deg = static_cast<float>(fs.heading_sigma_rad * kDegPerRad);
     if (sensors_[i].segment >= 0 && !h.live) frame_.segment_flags[sensors_[i].segment] |= kSegStale;

@@ -110,21 +110,6 @@ CalibrationProgress RigEngine::calibration_progress() const {
   return p;
 }
 
-SensorFilterState RigEngine::sensor_state(int i) const {
-  SensorFilterState st;
-  const AttitudeFilter& f = tracker_.filter(i);
-  st.initialised = f.counters().gyr_ok > 0;
-  st.at_rest = f.at_rest();
-  st.mag_disturbed = cfg_.filter.use_mag && f.mag_disturbed();
-  st.mag_no_reference = cfg_.filter.use_mag && f.mag_no_reference();
-  st.gyro_bias_rad_s = f.gyro_bias_rad_s().norm();
-  st.heading_sigma_rad = cfg_.filter.use_mag ? f.heading_sigma_rad() : 0.0;
-  const int seg = tracker_.sensor(i).segment;
-  const Calibration& c = tracker_.skeleton().calibration();
-  st.calibrated = seg >= 0 && c.valid && c.calibrated[seg];
-  return st;
-}
-
 void RigEngine::calibrate(CalibrationPose pose) {
   tracker_.start_calibration(pose, tracker_.newest_t_ns());
 }

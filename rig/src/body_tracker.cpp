@@ -61,6 +61,21 @@ Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
   return opt_.use_mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();
 }
 
+SensorHealth BodyTracker::sensor_health(int i) const {
+  SensorHealth h;
+  if (i < 0 || i >= sensor_count()) return h;
+  const AttitudeFilter& f = filters_[static_cast<size_t>(i)];
+  h.at_rest = f.at_rest();
+  h.mag_disturbed = opt_.use_mag && f.mag_disturbed();
+  h.mag_no_reference = opt_.use_mag && f.mag_no_reference();
+  h.gyro_bias_rad_s = f.gyro_bias_rad_s().norm();
+  h.heading_sigma_rad = opt_.use_mag ? f.heading_sigma_rad() : 0.0;
+  const int seg = sensors_[static_cast<size_t>(i)].segment;
+  const Calibration& c = skeleton_.calibration();
+  h.calibrated = seg >= 0 && c.valid && c.calibrated[seg];
+  return h;
+}
+
 void BodyTracker::on_sample(int i, const ImuSample& in) {
   if (i < 0 || i >= sensor_count()) return;
   const TrackerSensor& sensor = sensors_[static_cast<size_t>(i)];
@@ -94,10 +109,7 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
     apply_heading_from_motion(s.t_host_ns);
   }
   // 5. The segment's input: orientation and the filter's flags.
-  const uint32_t flags = (f.at_rest() ? uint32_t{kSegAtRest} : 0u) |
-                         (opt_.use_mag && f.mag_disturbed() ? uint32_t{kSegMagDisturbed} : 0u) |
-                         (opt_.use_mag && f.mag_no_reference() ? uint32_t{kSegMagNoReference} : 0u);
-  skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags);
+  skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, sensor_health(i).segment_flags());
 }
 
 void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q) {

@@ -44,9 +44,8 @@ class GyroEngine final : public daemon::PoseEngine {
     }
     if (calibrations) out.flags |= kFrameCalibrated;
   }
-  daemon::SensorFilterState sensor_state(int i) const override {
-    daemon::SensorFilterState s;
-    s.initialised = last_t[i] != 0;
+  daemon::SensorHealth sensor_health(int) const override {
+    daemon::SensorHealth s;
     s.calibrated = calibrations > 0;
     return s;
   }

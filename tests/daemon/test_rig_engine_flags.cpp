@@ -57,7 +57,7 @@ TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
       no_ref_early = count(kSegMagNoReference);
       disturbed_early = count(kSegMagDisturbed);
       for (int i = 0; i < sim::Performer::kSensorCount; ++i)
-        EXPECT_TRUE(engine.sensor_state(i).mag_no_reference) << i;
+        EXPECT_TRUE(engine.sensor_health(i).mag_no_reference) << i;
     }
   }
   EXPECT_EQ(tracked, sim::Performer::kSensorCount);
@@ -66,7 +66,7 @@ TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
   EXPECT_EQ(count(kSegMagNoReference), 0);
   EXPECT_EQ(count(kSegMagDisturbed), 0);
   for (int i = 0; i < sim::Performer::kSensorCount; ++i)
-    EXPECT_FALSE(engine.sensor_state(i).mag_no_reference) << i;
+    EXPECT_FALSE(engine.sensor_health(i).mag_no_reference) << i;
 }
 
 }  // namespace

@@ -33,7 +33,6 @@ class RecordTap {
 /// A snapshot of the pipeline for status reports (copied under a mutex, at most per frame).
 struct PipelineStatus {
   PoseFrame frame;  ///< the last published frame (includes per-sensor SensorStatus)
-  std::array<SensorFilterState, kMaxSensors> filter{};
   CalibrationProgress calibration;
   uint64_t samples = 0, rejected = 0, ring_drops = 0, frames = 0;
   bool calibrating = false;

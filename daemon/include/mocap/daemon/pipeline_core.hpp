@@ -70,7 +70,6 @@ class PipelineCore {
 
   const PoseFrame& last_frame() const { return frame_; }
   const std::vector<SensorInfo>& sensors() const { return sensors_; }
-  SensorFilterState filter_state(int sensor) const { return engine_.sensor_state(sensor); }
   CalibrationProgress calibration_progress() const { return engine_.calibration_progress(); }
   uint64_t samples_processed() const { return samples_; }
   uint64_t rejected_samples() const { return rejected_; }

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "mocap/core/imu_sample.hpp"
+#include "mocap/rig/sensor_health.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
@@ -23,16 +24,8 @@ struct CalibrationProgress {
   std::array<char, 256> message{};  ///< last capture's outcome, NUL-terminated ("" if none)
 };
 
-/// What an engine knows about one sensor's filter (for health reports).
-struct SensorFilterState {
-  bool initialised = false;  ///< the filter has an orientation
-  bool at_rest = false;
-  bool mag_disturbed = false;
-  bool mag_no_reference = false;  ///< 9-D heading still provisional (no reference field yet)
-  bool calibrated = false;        ///< a sensor-to-segment calibration is applied
-  double gyro_bias_rad_s = 0;     ///< norm of the bias estimate
-  double heading_sigma_rad = 0;
-};
+/// One sensor's health (rig/sensor_health.hpp): produced once by the engine.
+using rig::SensorHealth;
 
 class PoseEngine {
  public:
@@ -44,7 +37,7 @@ class PoseEngine {
   /// Fills the pose part of `out` (segment orientations, positions, joints, violations,
   /// segment_flags, kFrameCalibrated) from the current state. Must not allocate.
   virtual void build_frame(int64_t t_ns, PoseFrame& out) = 0;
-  virtual SensorFilterState sensor_state(int sensor_index) const = 0;
+  virtual SensorHealth sensor_health(int sensor_index) const = 0;
   /// The calibration's progress; engines without calibration report none.
   virtual CalibrationProgress calibration_progress() const { return {}; }
   /// Takes the current sensor orientations as the given reference pose.

@@ -34,7 +34,9 @@ class RigEngine final : public PoseEngine {
   void on_sample(int sensor_index, const ImuSample& sample) override;
   void set_sensor_live(int sensor_index, bool live) override;
   void build_frame(int64_t t_ns, PoseFrame& out) override;
-  SensorFilterState sensor_state(int sensor_index) const override;
+  SensorHealth sensor_health(int sensor_index) const override {
+    return tracker_.sensor_health(sensor_index);
+  }
   CalibrationProgress calibration_progress() const override;
   void calibrate(CalibrationPose pose) override;
   void reset_heading() override;

@@ -23,6 +23,7 @@
 #include "mocap/core/imu_sample.hpp"
 #include "mocap/filter/attitude_filter.hpp"
 #include "mocap/rig/heading_from_motion.hpp"
+#include "mocap/rig/sensor_health.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
@@ -83,6 +84,8 @@ class BodyTracker {
   const TrackerSensor& sensor(int i) const { return sensors_[static_cast<size_t>(i)]; }
   int sensor_count() const { return static_cast<int>(sensors_.size()); }
   const TrackerOptions& options() const { return opt_; }
+  /// The sensor's health (its filter's state as the tracker uses it, and its calibration).
+  SensorHealth sensor_health(int i) const;
   /// The sensor's earth-frame orientation as the tracker uses it (9D or 6D output).
   Eigen::Quaterniond q_earth_sensor(int i) const;
   /// Newest sample time seen.

@@ -26,6 +26,7 @@ enum SegmentFlag : uint32_t {
   /// Its sensor's filter has not accepted a reference field yet (start-up): the heading follows
   /// the magnetometer provisionally. Not the same as kSegMagDisturbed (field rejected).
   kSegMagNoReference = 1u << 8,
+  kSegCalibrated = 1u << 9,  ///< its sensor has a sensor-to-segment calibration
 };
 
 /// Whole-frame state bits (PoseFrame::flags).
@@ -39,11 +40,12 @@ enum FrameFlag : uint32_t {
 
 /// Per-sensor health, as the daemon sees it.
 struct SensorStatus {
-  char name[24] = {};           ///< sensor name from the rig, NUL-terminated
-  int8_t segment = -1;          ///< Segment index it drives, -1 if none
-  uint8_t state = 0;            ///< 0 absent, 1 connecting, 2 streaming, 3 stale, 4 error
-  uint16_t flags = 0;           ///< SegmentFlag bits relevant to the sensor (rest, disturbed)
-  float rate_hz = 0;            ///< measured sample rate
+  char name[24] = {};   ///< sensor name from the rig, NUL-terminated
+  int8_t segment = -1;  ///< Segment index it drives, -1 if none
+  uint8_t state = 0;    ///< 0 absent, 1 connecting, 2 streaming, 3 stale, 4 error
+  uint16_t flags =
+      0;              ///< SegmentFlag bits of its health (rig::SensorHealth::segment_flags) + stale
+  float rate_hz = 0;  ///< measured sample rate
   float last_age_ms = 0;        ///< age of the newest sample when the frame was built
   uint32_t drops = 0;           ///< samples lost (counter gaps + full queues)
   uint32_t errors = 0;          ///< checksum failures and resyncs
