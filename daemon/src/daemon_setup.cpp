@@ -20,10 +20,11 @@ Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log) {
     parts.services.push_back(make_demo(cfg, log.child("demo", log.level())));
     parts.frame_flags |= kFrameDemo;
     log.info("demo: %zu simulated sensors (%s path, %s protocol, motion '%s')", cfg.sensors.size(),
-             cfg.demo.path.c_str(), cfg.demo.protocol.c_str(), cfg.demo.motion.c_str());
+             std::string(to_string(cfg.demo.path)).c_str(), cfg.demo.protocol.c_str(),
+             cfg.demo.motion.c_str());
   }
   parts.engine = std::make_unique<RigEngine>(cfg, &log);
-  if (!(demo && cfg.demo.path == "direct"))
+  if (!(demo && cfg.demo.path == DemoPath::direct))
     parts.device_factory = [](const DeviceSpec& spec, Logger l) {
       return make_device(spec, std::move(l));
     };

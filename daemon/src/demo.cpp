@@ -26,7 +26,8 @@ namespace {
 
 class DemoService final : public Service {
  public:
-  DemoService(Config& cfg, Logger log) : log_(std::move(log)), direct_(cfg.demo.path == "direct") {
+  DemoService(Config& cfg, Logger log)
+      : log_(std::move(log)), direct_(cfg.demo.path == DemoPath::direct) {
     sim::PerformerParams p;
     p.seed = cfg.demo.seed;
     p.rate_hz = cfg.demo.rate_hz;
