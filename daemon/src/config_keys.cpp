@@ -126,10 +126,12 @@ const Section<BodyConfig>& section() {
   using S = BodyConfig;
   static const Key<S> k[] = {
       {.name = "model",
+       .doc_type = "file path",
        .doc_default = "none",
        .help = "a body model file in the format of `config/body/default.toml` (`height_m`, "
                "`[segment.NAME]` offsets) read first; the keys of `[body]` override it"},
       {.name = "joint_limits",
+       .doc_type = "file path",
        .doc_default = "none",
        .help = "a joint-limits file in the format of `config/body/joint_limits.toml` "
                "(`[joint.NAME]`) applied over the anatomical defaults (docs/skeleton.md); "
@@ -141,13 +143,15 @@ const Section<BodyConfig>& section() {
        .unit = "m",
        .help = "body height; segment lengths follow anthropometric ratios (Winter)"},
       {.name = "segment",
+       .doc_type = "tables",
        .doc_default = "none",
        .help = "`[body.segment.NAME]` tables: measured `joint_offset_m` and `end_offset_m` of a "
-               "segment (see below)"},
+               "segment (example above)"},
       {.name = "joint",
+       .doc_type = "tables",
        .doc_default = "none",
        .help = "`[body.joint.NAME]` tables: personal joint ranges `a_deg`, `b_deg`, "
-               "`twist_deg`, `hinge`, `limited` (see below)"},
+               "`twist_deg`, `hinge`, `limited` (example above)"},
       {.name = "root_motion",
        .at = AT(root_motion),
        .help = "move the root with the stance foot (false: pelvis pinned)"},
@@ -444,6 +448,7 @@ const Section<SensorConfig>& section() {
        .choices = kLogLevelChoices,
        .help = "this device's log level"},
       {.name = "options",
+       .doc_type = "table",
        .doc_default = "none",
        .help = "`[sensor.options]`: protocol options (strings, numbers, booleans), e.g. "
                "`quat_order = \"wxyz\"`"},

@@ -47,8 +47,9 @@ struct Key {
   bool ipv4 = false;
   /// Non-empty: the key of a removed feature, accepted with a warning giving this reason.
   std::string_view removed;
-  /// Default shown in the docs for a hand-read key (other keys show the struct's default).
-  std::string_view doc_default;
+  /// Type and default shown in the docs for a hand-read key (other keys show the member's type
+  /// and the struct's default).
+  std::string_view doc_type, doc_default;
   std::string_view help;
 };
 

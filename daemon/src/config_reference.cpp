@@ -2,6 +2,7 @@
 // markdown key reference of docs/configuration.md (`mocapd --print-config-reference`) and the
 // key list of `mocapd --help`.
 #include <charconv>
+#include <cmath>
 #include <type_traits>
 
 #include "config_keys.hpp"
@@ -16,8 +17,15 @@ std::string number_text(double v) {
   return std::string(buf, r.ptr);
 }
 
+/// A range bound: whole numbers in full ("4000000", not "4e+06").
+std::string bound_text(double v) {
+  if (v >= 9.2e18) return "2^63-1";
+  if (v == std::floor(v) && std::fabs(v) < 1e15) return std::to_string(static_cast<int64_t>(v));
+  return number_text(v);
+}
+
 std::string range_text(double lo, double hi) {
-  return number_text(lo) + ".." + (hi >= 9.2e18 ? std::string("2^63-1") : number_text(hi));
+  return bound_text(lo) + ".." + bound_text(hi);
 }
 
 /// One markdown row: key, type (unit), default, range, meaning.
@@ -72,9 +80,9 @@ std::string section_markdown(const keys::Section<S>& sec) {
   if (!sec.note.empty()) out += std::string(sec.note) + "\n\n";
   out += "| key | type | default | range | meaning |\n|---|---|---|---|---|\n";
   std::string removed;
-  const auto add = [&out](const Row& r) {
-    out += "| `" + r.key + "` | " + r.type + " | " + code(r.def) + " | " + r.range + " | " +
-           r.help + " |\n";
+  const auto add = [&out](const Row& r, bool words = false) {
+    out += "| `" + r.key + "` | " + r.type + " | " + (words ? r.def : code(r.def)) + " | " +
+           r.range + " | " + r.help + " |\n";
   };
   for (const keys::Key<S>& k : sec.keys) {
     if (!k.removed.empty()) {
@@ -92,10 +100,10 @@ std::string section_markdown(const keys::Section<S>& sec) {
         k.at);
     r.key = std::string(k.name);
     if (!k.unit.empty()) r.type += " (" + std::string(k.unit) + ")";
-    if (r.type.empty()) r.type = "see below";
-    if (!k.doc_default.empty()) r.def = std::string(k.doc_default);
+    if (!k.doc_type.empty()) r.type = std::string(k.doc_type);
+    if (!k.doc_default.empty()) r.def = std::string(k.doc_default);  // words, not a value
     r.help = std::string(k.help);
-    add(r);
+    add(r, !k.doc_default.empty());
   }
   if constexpr (std::is_same_v<S, FilterConfig>) {
     static const FilterParams defaults;
