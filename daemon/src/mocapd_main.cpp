@@ -141,7 +141,8 @@ int main(int argc, char** argv) {
   }
 
   try {
-    Daemon d(*cfg, make_live_parts(*cfg, args.has("demo"), log), log);
+    LiveSetup live = make_live(*cfg, args.has("demo"), log);
+    Daemon d(live.cfg, std::move(live.parts), log);
     d.start();
     d.wait(sfd);
     signalfd_siginfo si{};
