@@ -198,7 +198,7 @@ struct ConfigErrors {
   std::string to_string() const;  ///< one line per error
 };
 
-/// Checks that need other modules (drivers, filter); each returns "" or a message. The loader
+/// Checks that need the drivers; each returns "" or a message. The loader
 /// reports a message at the offending key's position.
 struct ConfigValidators {
   std::function<std::string(const SensorConfig&)> sensor;  ///< e.g. unknown driver or option
