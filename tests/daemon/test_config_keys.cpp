@@ -191,3 +191,37 @@ TEST(ConfigKeys, CommittedDocMatchesGeneratedReference) {
     EXPECT_NE(committed.find("| `" + line.substr(0, eq) + "` |"), std::string::npos) << line;
   }
 }
+
+// Every key the defaults print, set by --set to a few odd values: each either loads and prints
+// back exactly, or is refused with an error naming the key (never a partial configuration).
+TEST(ConfigKeys, EveryPrintedKeyRoundTripsOrIsRefusedByName) {
+  std::vector<std::string> keys;
+  std::istringstream printed(config_to_toml(Config{}));
+  std::string section;
+  for (std::string line; std::getline(printed, line);) {
+    if (line.size() > 2 && line[0] == '[') section = line.substr(1, line.find(']') - 1);
+    const size_t eq = line.find(" = ");
+    if (eq != std::string::npos && line[0] != '#')
+      keys.push_back(section + "." + line.substr(0, eq));
+  }
+  ASSERT_GT(keys.size(), 30u);
+  // The filter's parameters are printed only when changed: two of them, one of each type.
+  keys.insert(keys.end(), {"filter.tau_mag_s", "filter.rest_bias_est"});
+  int loaded = 0;
+  for (const std::string& key : keys) {
+    for (const char* value : {"0", "1", "-1", "0.1", "1e300", "nan", "true", "\"x\"", "[1, 2, 3]",
+                              "1.0000000000000002", "\"debug\"", "\"direct\"", "\"tpose\""}) {
+      ConfigErrors errs;
+      auto c = parse_config("", "rig.toml", {key + "=" + value}, errs);
+      if (!c) {
+        ASSERT_FALSE(errs.errors.empty()) << key << "=" << value;
+        EXPECT_NE(errs.to_string().find(key), std::string::npos)
+            << key << "=" << value << ": " << errs.to_string();
+        continue;
+      }
+      ++loaded;
+      expect_exact_round_trip(*c, key + "=" + value);
+    }
+  }
+  EXPECT_GT(loaded, static_cast<int>(keys.size()));  // most keys take some of the values
+}
