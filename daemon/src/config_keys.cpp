@@ -1,16 +1,19 @@
 // Every configuration key, declared once: one table per section. The loader (config.cpp) reads
 // and range-checks each key through its entry, --print-config writes it, `mocapd --help` lists
 // it and `mocapd --print-config-reference` writes docs/configuration.md's key reference from it
-// (tests/daemon/test_config_reference.cpp checks the committed doc matches).
+// (tests/daemon/test_config_keys.cpp checks the committed doc matches).
 //
-// Adding a key is one line: give the section struct in mocap/daemon/config.hpp its member with
-// its default (the default lives there, and only there), then add an entry to the section's
-// table below, e.g.
+// Adding a key is one table entry: give the section struct in mocap/daemon/config.hpp its
+// member with its default (the default lives there, and only there), then add an entry to the
+// section's table below, e.g.
 //     {.name = "port", .at = AT(port), .lo = 1, .hi = 65535, .help = "UDP port"},
 // The member's type is the key's type (bool, int, uint64_t, double, std::string, an enum with
 // `.choices`, an optional triple, a list of segment names); `.lo`/`.hi` are its range, `.unit`
-// its unit, `.help` the docs' text. A new section: its struct, a table and `section<S>()` here,
-// and one line in keys::for_each_section (config_keys.hpp). Then run scripts/update-config-doc.
+// its unit, `.help` the docs' text; `.omit_default` for a key whose default means "absent",
+// `.removed = "why"` for a key of a removed feature (accepted with a warning). A new enum type:
+// an enum class with to_string(), and its `E& (*)(S&)` alternative in keys::Access. A new section: its struct, a table and `section<S>()` here,
+// its declaration and one line in keys::for_each_section (config_keys.hpp). Then run
+// scripts/update-config-doc (the docs' key reference is generated; a test compares).
 // Filter keys are FilterParams members: they come from the filter module's own table
 // (filter_param_names.hpp), not from here.
 #include "config_keys.hpp"

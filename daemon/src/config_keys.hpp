@@ -61,8 +61,33 @@ struct Section {
   std::span<const Key<S>> keys;
 };
 
+/// The table of section struct S (config_keys.cpp).
 template <class S>
-const Section<S>& section();  // defined for each section struct in config_keys.cpp
+const Section<S>& section();
+template <>
+const Section<DaemonSection>& section();
+template <>
+const Section<PipelineConfig>& section();
+template <>
+const Section<FilterConfig>& section();
+template <>
+const Section<BodyConfig>& section();
+template <>
+const Section<CalibrationConfig>& section();
+template <>
+const Section<JsonOutputConfig>& section();
+template <>
+const Section<VmcOutputConfig>& section();
+template <>
+const Section<VrchatOutputConfig>& section();
+template <>
+const Section<PostureOutputConfig>& section();
+template <>
+const Section<RecordingConfig>& section();
+template <>
+const Section<DemoConfig>& section();
+template <>
+const Section<SensorConfig>& section();
 
 /// Calls f(section<S>(), member) for every [section] of Config, in file order ([[sensor]] and
 /// [filter]'s FilterParams are handled apart: see config.cpp).
