@@ -18,6 +18,14 @@
 namespace mocap::daemon {
 
 namespace {
+// Strings as basic "..." strings only: toml++ 3.3 writes a string holding ''' and a newline as a
+// multi-line literal string that does not parse back.
+constexpr toml::format_flags kFormat = toml::toml_formatter::default_flags &
+                                       ~toml::format_flags::allow_literal_strings &
+                                       ~toml::format_flags::allow_multi_line_strings;
+}  // namespace
+
+namespace {
 
 toml::array toml_vec3(const Eigen::Vector3d& v) {
   return toml::array{v.x(), v.y(), v.z()};
@@ -139,7 +147,7 @@ std::string config_to_toml(const Config& c) {
   std::ostringstream out;
   out << "# mocapd effective configuration" << (c.source.empty() ? "" : " (from " + c.source + ")")
       << "\n"
-      << toml::toml_formatter(root) << "\n";
+      << toml::toml_formatter(root, kFormat) << "\n";
   return out.str();
 }
 

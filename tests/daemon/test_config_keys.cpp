@@ -145,6 +145,19 @@ hid = true
   EXPECT_EQ(back->filter.params.tau_mag_s, 3.3333333333333335);
 }
 
+// A string holding ''' and a newline (toml++ would print it as a literal string that does not
+// parse back) is printed as a basic string and comes back unchanged.
+TEST(ConfigKeys, AnyStringRoundTrips) {
+  ConfigErrors errs;
+  const char* text = R"T([recording]
+auto_start = """a'''b\n"c"\t\\"""
+)T";
+  auto c = parse_config(text, "rig.toml", {}, errs);
+  ASSERT_TRUE(c) << errs.to_string();
+  EXPECT_EQ(c->recording.auto_start, "a'''b\n\"c\"\t\\");
+  expect_exact_round_trip(*c, "string");
+}
+
 // Every example rig loads and prints to a text that loads to the same configuration.
 TEST(ConfigKeys, ExampleRigsRoundTrip) {
   const std::filesystem::path src = MOCAP_SOURCE_DIR;
