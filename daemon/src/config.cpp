@@ -1,7 +1,10 @@
 // Loads and validates the daemon's TOML configuration: typed, range-checked reads with
-// file:line:column errors, unknown keys rejected with the nearest valid name, --set overrides,
-// and the effective configuration printed back as TOML.
+// file:line:column errors, unknown keys rejected with the nearest valid name, and --set
+// overrides. Which keys exist, their types and ranges come from the key tables
+// (config_keys.cpp); this file knows how to read each type, plus the hand-read parts (body
+// files, sensor options, cross-key checks). config_write.cpp prints a configuration back.
 #include "mocap/daemon/config.hpp"
+#include "config_keys.hpp"
 #include "mocap/core/runtime_dir.hpp"
 #include "mocap/core/text_check.hpp"
 
@@ -10,16 +13,19 @@
 
 #include <toml++/toml.h>
 #include <algorithm>
-#include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <set>
 #include <sstream>
+#include <variant>
 
 #include "mocap/core/segments.hpp"
-#include "mocap/core/thread_priority.hpp"
+#include "mocap/filter/filter_param_names.hpp"
 #include "mocap/skeleton/config_tables.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
@@ -79,10 +85,8 @@ std::string nearest_name(std::string_view word, const std::vector<std::string_vi
   return best_d <= limit ? best : std::string();
 }
 
-LogLevel log_level_of(std::string_view name) {
-  LogLevel l = LogLevel::info;
-  parse_log_level(name, l);
-  return l;
+std::string_view to_string(DemoPath p) {
+  return p == DemoPath::direct ? "direct" : "device";
 }
 
 std::string default_control_socket() {
@@ -93,8 +97,6 @@ std::string default_control_socket() {
 }
 
 namespace {
-
-constexpr std::string_view kLogLevels[] = {"trace", "debug", "info", "warn", "error", "off"};
 
 /// Thrown by Ctx::add past kMaxConfigErrors (not a std::exception: nothing else catches it).
 struct TooManyConfigErrors {};
@@ -133,7 +135,7 @@ std::string join(const std::string& path, std::string_view key) {
   return path.empty() ? std::string(key) : path + "." + std::string(key);
 }
 
-std::string list_of(std::initializer_list<std::string_view> names) {
+std::string list_of(const std::vector<std::string_view>& names) {
   std::string out;
   for (auto n : names)
     out += (out.empty() ? "" : ", ") + std::string(n);
@@ -147,19 +149,19 @@ class TableReader {
       : t_(t), where_(where), path_(std::move(path)), ctx_(ctx) {}
 
   const toml::node* node(std::string_view key) {
-    known_.push_back(key);
+    known_.emplace_back(key);
     return t_ ? t_->get(key) : nullptr;
   }
 
   void str(std::string_view key, std::string& out,
-           std::initializer_list<std::string_view> allowed = {}) {
+           const std::vector<std::string_view>& allowed = {}) {
     const toml::node* n = node(key);
     if (!n) return;
     auto v = n->value<std::string>();
     if (!n->is_string() || !v) return type_error(n, key, "a string");
     if (allowed.size() && std::find(allowed.begin(), allowed.end(), *v) == allowed.end()) {
       std::string msg = "'" + *v + "' is not one of " + list_of(allowed);
-      auto near = nearest_name(*v, std::vector<std::string_view>(allowed));
+      auto near = nearest_name(*v, allowed);
       if (!near.empty()) msg += " (did you mean '" + near + "'?)";
       return ctx_.add(n, join(path_, key), msg);
     }
@@ -177,6 +179,14 @@ class TableReader {
       return ctx_.add(n, join(path_, key), m.str());
     }
     out = v;
+  }
+
+  /// Any number, infinities and NaN included (the filter's parameters, as they always were).
+  void any_number(std::string_view key, double& out) {
+    const toml::node* n = node(key);
+    if (!n) return;
+    if (!n->is_number()) return type_error(n, key, "a number");
+    out = *n->value<double>();
   }
 
   template <typename Int>
@@ -290,17 +300,23 @@ class TableReader {
     for (const auto& [k, v] : *t_) {
       if (std::find(known_.begin(), known_.end(), k.str()) != known_.end()) continue;
       std::string msg = "unknown key";
-      auto near = nearest_name(k.str(), known_);
+      auto near =
+          nearest_name(k.str(), std::vector<std::string_view>(known_.begin(), known_.end()));
       if (!near.empty())
         msg += " (did you mean '" + near + "'?)";
-      else
+      else if (known_.size() <= 16)
         msg += " (valid keys: " + list_known() + ")";
+      else  // e.g. the filter's parameters: too many to list in one line
+        msg += " (mocapd --print-config-reference lists the valid keys)";
       ctx_.add(&v, join(path_, k.str()), msg);
     }
   }
 
   const std::string& path() const { return path_; }
   const toml::node* where() const { return where_; }
+  /// The key's node without marking it known (nullptr if absent).
+  const toml::node* peek(std::string_view key) const { return t_ ? t_->get(key) : nullptr; }
+  Ctx& ctx() { return ctx_; }
 
  private:
   void type_error(const toml::node* n, std::string_view key, const char* want) {
@@ -308,8 +324,8 @@ class TableReader {
   }
   std::string list_known() const {
     std::string out;
-    for (auto k : known_)
-      out += (out.empty() ? "" : ", ") + std::string(k);
+    for (const auto& k : known_)
+      out += (out.empty() ? "" : ", ") + k;
     return out;
   }
 
@@ -317,25 +333,84 @@ class TableReader {
   const toml::node* where_;
   std::string path_;
   Ctx& ctx_;
-  std::vector<std::string_view> known_;
+  std::vector<std::string> known_;  // owned: some keys are built at run time
 };
 
-/// A scalar's text: strings as they are, numbers and booleans as TOML writes them.
+/// The shortest text that reads back as exactly `v`.
+std::string number_text(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+/// A scalar's text: strings as they are, numbers (shortest exact text) and booleans as TOML
+/// writes them.
 bool scalar_text(const toml::node& v, std::string& out) {
   if (v.is_string())
     out = *v.value<std::string>();
   else if (v.is_integer())
     out = std::to_string(*v.value<int64_t>());
-  else if (v.is_floating_point()) {
-    std::ostringstream o;
-    o.precision(17);
-    o << *v.value<double>();
-    out = o.str();
-  } else if (v.is_boolean())
+  else if (v.is_floating_point())
+    out = number_text(*v.value<double>());
+  else if (v.is_boolean())
     out = *v.value<bool>() ? "true" : "false";
   else
     return false;
   return true;
+}
+
+bool valid_ipv4(const std::string& s) {
+  in_addr a{};
+  return inet_pton(AF_INET, s.c_str(), &a) == 1;
+}
+
+/// Reads one key of section S into the member its accessor `at` returns, by the member's type.
+template <class S, class T>
+void read_value(TableReader& r, const keys::Key<S>& k, T& (*at)(S&), S& s) {
+  T& v = at(s);
+  if constexpr (std::is_same_v<T, bool>) {
+    r.boolean(k.name, v);
+  } else if constexpr (std::is_same_v<T, int>) {
+    r.integer(k.name, v, static_cast<int64_t>(k.lo), static_cast<int64_t>(k.hi));
+  } else if constexpr (std::is_same_v<T, uint64_t>) {
+    r.integer(k.name, v, static_cast<int64_t>(k.lo),
+              k.hi >= 9.2e18 ? INT64_MAX : static_cast<int64_t>(k.hi));
+  } else if constexpr (std::is_same_v<T, double>) {
+    r.num(k.name, v, k.lo, k.hi);
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    r.str(k.name, v);
+    if (k.ipv4 && !valid_ipv4(v))
+      r.ctx().add(r.peek(k.name), join(r.path(), k.name), "'" + v + "' is not an IPv4 address");
+  } else if constexpr (std::is_enum_v<T>) {
+    std::string name;
+    r.str(k.name, name, keys::split_choices(k.choices));
+    if (!name.empty()) keys::enum_from_name(name, v);
+  } else if constexpr (std::is_same_v<T, std::optional<std::array<double, 3>>>) {
+    if (k.direction)
+      r.direction(k.name, v);
+    else
+      r.ranged_triple(k.name, v, k.lo, k.hi);
+  } else {
+    static_assert(std::is_same_v<T, std::vector<std::string>>);
+    r.segment_names(k.name, v, static_cast<std::size_t>(k.lo), static_cast<std::size_t>(k.hi));
+  }
+}
+
+/// Reads the keys of section S that its table binds to members; warns about removed ones.
+/// Hand-read keys (no member) are read by their section's code, which marks them known.
+template <class S>
+void read_keys(TableReader& r, const keys::Section<S>& sec, S& s) {
+  for (const keys::Key<S>& k : sec.keys) {
+    if (!k.removed.empty()) {
+      r.removed(k.name, k.removed);
+      continue;
+    }
+    std::visit(
+        [&](auto at) {
+          if constexpr (!std::is_same_v<decltype(at), std::monostate>) read_value(r, k, at, s);
+        },
+        k.at);
+  }
 }
 
 bool valid_axis_remap(std::string_view s) {
@@ -373,32 +448,12 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
                  SensorConfig& s) {
   const size_t errors_before = ctx.errors.errors.size();
   TableReader r(&t, where, "sensor[" + std::to_string(index) + "]", ctx);
-  r.str("name", s.name);
-  r.str("driver", s.driver);
-  r.str("port", s.port);
-  r.integer("vid", s.vid, 0, 0xFFFF);
-  r.integer("pid", s.pid, 0, 0xFFFF);
-  r.str("serial", s.serial);
-  r.boolean("hid", s.hid);
-  r.integer("baud", s.baud, 0, 4000000);
-  r.num("rate_hz", s.rate_hz, 0, 10000);
-  r.str("segment", s.segment);
-  r.str("axis_remap", s.axis_remap);
-  r.direction("site_normal", s.site_normal);
-  r.ranged_triple("gyr_scale", s.gyr_scale, 0.8, 1.2);
-  r.str("log_level", s.log_level, {"trace", "debug", "info", "warn", "error", "off"});
+  read_keys(r, keys::section<SensorConfig>(), s);
   if (const toml::table* opts = r.table("options")) {
     for (const auto& [k, v] : *opts) {
-      if (v.is_string())
-        s.options[std::string(k.str())] = *v.value<std::string>();
-      else if (v.is_integer())
-        s.options[std::string(k.str())] = std::to_string(*v.value<int64_t>());
-      else if (v.is_floating_point()) {
-        std::ostringstream o;
-        o << *v.value<double>();
-        s.options[std::string(k.str())] = o.str();
-      } else if (v.is_boolean())
-        s.options[std::string(k.str())] = *v.value<bool>() ? "true" : "false";
+      std::string text;
+      if (scalar_text(v, text))
+        s.options[std::string(k.str())] = std::move(text);
       else
         ctx.add(&v, r.path() + ".options." + std::string(k.str()),
                 "expected a string, number or boolean");
@@ -442,11 +497,6 @@ void read_sensor(const toml::table& t, const toml::node* where, int index, Ctx& 
   }
 }
 
-bool valid_ipv4(const std::string& s) {
-  in_addr a{};
-  return inet_pton(AF_INET, s.c_str(), &a) == 1;
-}
-
 /// [body]: the model file, then height_m and [body.segment.*]; the joint-limits file, then
 /// [body.joint.*]. Errors inside the included files name their own file:line and the key that
 /// included them.
@@ -487,7 +537,6 @@ void read_body(TableReader& b, BodyConfig& body, Ctx& ctx) {
   include("model", model_file, [&](const std::string& f) { body.model = load_body_config(f); });
   include("joint_limits", limits_file,
           [&](const std::string& f) { body.limits = load_joint_limits(f); });
-  b.num("height_m", body.model.height_m, kMinBodyHeightM, kMaxBodyHeightM);
   if (const toml::node* n = b.node("segment")) {
     try {
       read_body_segments(*n, source_of(*n), body.model);
@@ -504,136 +553,46 @@ void read_body(TableReader& b, BodyConfig& body, Ctx& ctx) {
   }
 }
 
+/// What a section reads by hand besides its table's members: nothing, except [body] (the model
+/// and joint-limits files, segment and joint tables) and [filter] (the FilterParams members).
+template <class S>
+void read_by_hand(TableReader&, S&, Ctx&) {}
+void read_by_hand(TableReader& b, BodyConfig& body, Ctx& ctx) {
+  read_body(b, body, ctx);
+}
+void read_by_hand(TableReader& f, FilterConfig& filter, Ctx&) {
+  for (const FilterParamEntry& e : filter_param_table()) {
+    if (auto* m = std::get_if<bool FilterParams::*>(&e.member))
+      f.boolean(e.name, filter.params.*(*m));
+    else
+      f.any_number(e.name, filter.params.*std::get<double FilterParams::*>(e.member));
+  }
+}
+
 Config read_root(const toml::table& root, Ctx& ctx) {
   Config c;
   TableReader r(&root, &root, "", ctx);
-  {
-    TableReader d(r.table("daemon"), &root, "daemon", ctx);
-    d.str("log_level", c.daemon.log_level, {"trace", "debug", "info", "warn", "error", "off"});
-    d.str("control_socket", c.daemon.control_socket);
-    d.finish();
-  }
-  {
-    TableReader p(r.table("pipeline"), &root, "pipeline", ctx);
-    p.num("rate_hz", c.pipeline.rate_hz, 1, 2000);
-    p.boolean("publish_every_sample", c.pipeline.publish_every_sample);
-    p.num("stale_after_ms", c.pipeline.stale_after_ms, 10, 60000);
-    p.integer("realtime_priority", c.pipeline.realtime_priority, 0, kMaxRealtimePriority);
-    p.finish();
-  }
-  if (const toml::table* ft = r.table("filter")) {
-    // use_mag, plus any FilterParams name (checked by the filter module when validators given).
-    for (const auto& [k, v] : *ft) {
-      const std::string key(k.str());
-      const std::string path = "filter." + key;
-      if (key == "use_mag") {
-        if (!v.is_boolean())
-          ctx.add(&v, path, "expected true or false");
-        else
-          c.filter.use_mag = *v.value<bool>();
-        continue;
-      }
-      std::string text;
-      if (!scalar_text(v, text)) {
-        ctx.add(&v, path, "expected a number or boolean");
-        continue;
-      }
-      if (ctx.validators && ctx.validators->filter_param) {
-        if (std::string err = ctx.validators->filter_param(key, text); !err.empty()) {
-          std::vector<std::string_view> names(ctx.validators->filter_param_names.begin(),
-                                              ctx.validators->filter_param_names.end());
-          names.push_back("use_mag");
-          const std::string near = nearest_name(key, names);
-          ctx.add(&v, path,
-                  err + (near.empty() || near == key ? "" : " (did you mean '" + near + "'?)"));
-          continue;
-        }
-      }
-      c.filter.params[key] = text;
+  // A section "a.b" is read inside the reader of table "a" (which then reports a's unknown
+  // keys); sections of one parent are consecutive in keys::for_each_section.
+  std::unique_ptr<TableReader> parent;
+  keys::for_each_section(c, [&](const auto& sec, auto& s) {
+    const std::string path(sec.path);
+    const size_t dot = path.find('.');
+    const std::string head = dot == std::string::npos ? "" : path.substr(0, dot);
+    if (parent && parent->path() != head) {
+      parent->finish();
+      parent.reset();
     }
-  }
-  {
-    TableReader b(r.table("body"), &root, "body", ctx);
-    read_body(b, c.body, ctx);
-    b.boolean("root_motion", c.body.root_motion);
-    b.removed("enforce_limits", "joint limits are reported, never imposed: docs/skeleton.md");
-    b.finish();
-  }
-  {
-    TableReader k(r.table("calibration"), &root, "calibration", ctx);
-    k.str("pose", c.calibration.pose, {"npose", "tpose"});
-    k.num("countdown_s", c.calibration.countdown_s, 0, 60);
-    k.num("capture_s", c.calibration.capture_s, 0.05, 10);
-    k.str("file", c.calibration.file);
-    for (const char* key : {"refine_hinges", "heading_coupling", "relative_mag_heading"})
-      k.removed(key, "it made tracking of real motion worse: docs/accuracy.md");
-    k.str("heading", c.calibration.heading, {"mount_normals", "pelvis_sensor", "mean_sensors"});
-    k.finish();
-  }
-  if (const toml::table* outs = r.table("outputs")) {
-    TableReader o(outs, &root, "outputs", ctx);
-    {
-      TableReader j(o.table("json"), outs, "outputs.json", ctx);
-      j.boolean("enabled", c.outputs.json.enabled);
-      j.str("bind", c.outputs.json.bind);
-      j.integer("port", c.outputs.json.port, 0, 65535);
-      j.integer("max_clients", c.outputs.json.max_clients, 1, 1000);
-      j.finish();
-      if (!valid_ipv4(c.outputs.json.bind))
-        ctx.add(outs->get("json") ? outs->get_as<toml::table>("json")->get("bind") : nullptr,
-                "outputs.json.bind", "'" + c.outputs.json.bind + "' is not an IPv4 address");
-    }
-    {
-      TableReader v(o.table("vmc"), outs, "outputs.vmc", ctx);
-      v.boolean("enabled", c.outputs.vmc.enabled);
-      v.str("host", c.outputs.vmc.host);
-      v.integer("port", c.outputs.vmc.port, 1, 65535);
-      v.finish();
-      if (!valid_ipv4(c.outputs.vmc.host))
-        ctx.add(outs->get("vmc") ? outs->get_as<toml::table>("vmc")->get("host") : nullptr,
-                "outputs.vmc.host", "'" + c.outputs.vmc.host + "' is not an IPv4 address");
-    }
-    {
-      TableReader v(o.table("vrchat"), outs, "outputs.vrchat", ctx);
-      auto& vr = c.outputs.vrchat;
-      v.boolean("enabled", vr.enabled);
-      v.str("host", vr.host);
-      v.integer("port", vr.port, 1, 65535);
-      v.segment_names("trackers", vr.trackers, 1, 8);
-      v.boolean("head", vr.head);
-      v.num("height_m", vr.height_m, 0, 3);
-      v.finish();
-      if (!valid_ipv4(vr.host))
-        ctx.add(outs->get("vrchat") ? outs->get_as<toml::table>("vrchat")->get("host") : nullptr,
-                "outputs.vrchat.host", "'" + vr.host + "' is not an IPv4 address");
-    }
-    {
-      TableReader s(o.table("posture"), outs, "outputs.posture", ctx);
-      s.boolean("enabled", c.outputs.posture.enabled);
-      s.str("shm_name", c.outputs.posture.shm_name);
-      s.finish();
-    }
-    o.finish();
-  }
-  {
-    TableReader k(r.table("recording"), &root, "recording", ctx);
-    k.str("directory", c.recording.directory);
-    k.boolean("raw", c.recording.raw);
-    k.boolean("samples", c.recording.samples);
-    k.boolean("poses", c.recording.poses);
-    k.str("auto_start", c.recording.auto_start);
-    k.finish();
-  }
-  {
-    TableReader d(r.table("demo"), &root, "demo", ctx);
-    d.str("path", c.demo.path, {"device", "direct"});
-    d.str("protocol", c.demo.protocol);
-    d.num("rate_hz", c.demo.rate_hz, 1, 2000);
-    d.str("motion", c.demo.motion);
-    d.integer("seed", c.demo.seed, 0, INT64_MAX);
-    d.boolean("gyro_scale_calibration", c.demo.gyro_scale_calibration);
-    d.finish();
-  }
+    if (!head.empty() && !parent)
+      parent = std::make_unique<TableReader>(r.table(head), &root, head, ctx);
+    TableReader& up = parent ? *parent : r;
+    const std::string leaf = head.empty() ? path : path.substr(dot + 1);
+    TableReader t(up.table(leaf), &root, path, ctx);
+    read_by_hand(t, s, ctx);
+    read_keys(t, sec, s);
+    t.finish();
+  });
+  if (parent) parent->finish();
   if (const toml::node* sn = r.node("sensor")) {
     const toml::array* arr = sn->as_array();
     if (!arr || !arr->is_array_of_tables()) {
@@ -831,147 +790,10 @@ std::optional<Config> load_config(const std::string& path,
   return parse_config(text, path, overrides, errors, validators);
 }
 
-namespace {
-
-toml::array toml_vec3(const Eigen::Vector3d& v) {
-  return toml::array{v.x(), v.y(), v.z()};
-}
-
-/// [body] with every override inlined (no file keys), so a recorded configuration is complete.
-toml::table body_to_toml(const BodyConfig& b) {
-  toml::table t{{"height_m", b.model.height_m}, {"root_motion", b.root_motion}};
-  toml::table segments;
-  for (int i = 0; i < kSegmentCount; ++i) {
-    toml::table st;
-    if (b.model.joint_offset_m[i])
-      st.insert("joint_offset_m", toml_vec3(*b.model.joint_offset_m[i]));
-    if (b.model.end_offset_m[i]) st.insert("end_offset_m", toml_vec3(*b.model.end_offset_m[i]));
-    if (!st.empty()) segments.insert(std::string(kSegmentNames[i]), std::move(st));
-  }
-  if (!segments.empty()) t.insert("segment", std::move(segments));
-  const JointLimits defaults = default_joint_limits();
-  toml::table joints;
-  for (int i = 1; i < kSegmentCount; ++i) {
-    const JointLimit& l = b.limits.joint[i];
-    if (l == defaults.joint[i]) continue;
-    joints.insert(std::string(kJointNames[i]),
-                  toml::table{{"limited", l.limited},
-                              {"hinge", l.hinge},
-                              {"a_deg", toml::array{l.a_min_deg, l.a_max_deg}},
-                              {"b_deg", toml::array{l.b_min_deg, l.b_max_deg}},
-                              {"twist_deg", toml::array{l.twist_min_deg, l.twist_max_deg}}});
-  }
-  if (!joints.empty()) t.insert("joint", std::move(joints));
-  return t;
-}
-
-}  // namespace
-
 std::optional<Config> with_overrides(const Config& c, const std::vector<std::string>& sets,
                                      std::string_view source_name, ConfigErrors& errors) {
   if (sets.empty()) return c;
   return parse_config(config_to_toml(c), source_name, sets, errors);
-}
-
-std::string config_to_toml(const Config& c) {
-  toml::table root;
-  root.insert("daemon", toml::table{{"log_level", c.daemon.log_level},
-                                    {"control_socket", c.daemon.control_socket}});
-  root.insert("pipeline", toml::table{{"rate_hz", c.pipeline.rate_hz},
-                                      {"publish_every_sample", c.pipeline.publish_every_sample},
-                                      {"stale_after_ms", c.pipeline.stale_after_ms},
-                                      {"realtime_priority", c.pipeline.realtime_priority}});
-  {
-    toml::table f{{"use_mag", c.filter.use_mag}};
-    for (const auto& [k, v] : c.filter.params) {
-      // Values were numbers or booleans: print them back as such (anything else, which only an
-      // unvalidated config can hold, as a string).
-      char* end = nullptr;
-      errno = 0;
-      const long long n = std::strtoll(v.c_str(), &end, 10);
-      const bool is_int = !v.empty() && end && *end == '\0' && errno == 0;
-      errno = 0;
-      const double d = std::strtod(v.c_str(), &end);
-      const bool is_num = !v.empty() && end && *end == '\0' && errno == 0;
-      if (v == "true" || v == "false")
-        f.insert(k, v == "true");
-      else if (is_int)
-        f.insert(k, n);
-      else if (is_num)
-        f.insert(k, d);
-      else
-        f.insert(k, v);
-    }
-    root.insert("filter", std::move(f));
-  }
-  root.insert("body", body_to_toml(c.body));
-  root.insert("calibration", toml::table{{"pose", c.calibration.pose},
-                                         {"countdown_s", c.calibration.countdown_s},
-                                         {"capture_s", c.calibration.capture_s},
-                                         {"file", c.calibration.file},
-                                         {"heading", c.calibration.heading}});
-  toml::table outs;
-  outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
-                                  {"bind", c.outputs.json.bind},
-                                  {"port", c.outputs.json.port},
-                                  {"max_clients", c.outputs.json.max_clients}});
-  outs.insert("vmc", toml::table{{"enabled", c.outputs.vmc.enabled},
-                                 {"host", c.outputs.vmc.host},
-                                 {"port", c.outputs.vmc.port}});
-  {
-    toml::array trackers;
-    for (const auto& t : c.outputs.vrchat.trackers)
-      trackers.push_back(t);
-    outs.insert("vrchat", toml::table{{"enabled", c.outputs.vrchat.enabled},
-                                      {"host", c.outputs.vrchat.host},
-                                      {"port", c.outputs.vrchat.port},
-                                      {"trackers", std::move(trackers)},
-                                      {"head", c.outputs.vrchat.head},
-                                      {"height_m", c.outputs.vrchat.height_m}});
-  }
-  outs.insert("posture", toml::table{{"enabled", c.outputs.posture.enabled},
-                                     {"shm_name", c.outputs.posture.shm_name}});
-  root.insert("outputs", std::move(outs));
-  root.insert("recording", toml::table{{"directory", c.recording.directory},
-                                       {"raw", c.recording.raw},
-                                       {"samples", c.recording.samples},
-                                       {"poses", c.recording.poses},
-                                       {"auto_start", c.recording.auto_start}});
-  root.insert("demo", toml::table{{"path", c.demo.path},
-                                  {"protocol", c.demo.protocol},
-                                  {"rate_hz", c.demo.rate_hz},
-                                  {"motion", c.demo.motion},
-                                  {"seed", static_cast<int64_t>(c.demo.seed)},
-                                  {"gyro_scale_calibration", c.demo.gyro_scale_calibration}});
-  toml::array sensors;
-  for (const auto& s : c.sensors) {
-    toml::table t{{"name", s.name},          {"driver", s.driver},   {"baud", s.baud},
-                  {"rate_hz", s.rate_hz},    {"segment", s.segment}, {"axis_remap", s.axis_remap},
-                  {"log_level", s.log_level}};
-    if (!s.port.empty()) t.insert("port", s.port);
-    if (s.site_normal)
-      t.insert("site_normal",
-               toml::array{(*s.site_normal)[0], (*s.site_normal)[1], (*s.site_normal)[2]});
-    if (s.gyr_scale)
-      t.insert("gyr_scale", toml::array{(*s.gyr_scale)[0], (*s.gyr_scale)[1], (*s.gyr_scale)[2]});
-    if (s.vid >= 0) {
-      t.insert("vid", s.vid);
-      t.insert("pid", s.pid);
-      t.insert("hid", s.hid);
-      if (!s.serial.empty()) t.insert("serial", s.serial);
-    }
-    toml::table opts;
-    for (const auto& [k, v] : s.options)
-      opts.insert(k, v);
-    t.insert("options", std::move(opts));
-    sensors.push_back(std::move(t));
-  }
-  if (!sensors.empty()) root.insert("sensor", std::move(sensors));
-  std::ostringstream out;
-  out << "# mocapd effective configuration" << (c.source.empty() ? "" : " (from " + c.source + ")")
-      << "\n"
-      << toml::toml_formatter(root) << "\n";
-  return out.str();
 }
 
 }  // namespace mocap::daemon

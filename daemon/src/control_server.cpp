@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "mocap/core/time.hpp"
+#include "mocap/core/unix_line_client.hpp"
 #include "mocap/daemon/control.hpp"
 
 namespace mocap::daemon {
@@ -41,16 +42,6 @@ int connect_unix(const std::string& path) {
     return -1;
   }
   return fd;
-}
-
-bool write_all(int fd, std::string_view data) {
-  while (!data.empty()) {
-    const ssize_t n = ::send(fd, data.data(), data.size(), MSG_NOSIGNAL);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    data.remove_prefix(static_cast<size_t>(n));
-  }
-  return true;
 }
 
 }  // namespace
@@ -282,49 +273,7 @@ void ControlServer::close_conn(std::size_t i) {
 }
 
 std::string control_call(const std::string& path, std::string_view request_line, int timeout_ms) {
-  const int fd = connect_unix(path);
-  if (fd < 0)
-    throw std::runtime_error("cannot reach mocapd at " + path + ": " + std::strerror(errno) +
-                             " (is it running?)");
-  // Only a daemon of our own user (or root) gets our commands and is believed: another user
-  // may have created the socket first.
-  ucred cred{};
-  socklen_t cred_len = sizeof cred;
-  if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &cred_len) != 0 ||
-      (cred.uid != ::geteuid() && cred.uid != 0)) {
-    ::close(fd);
-    throw std::runtime_error("refusing " + path + ": it is served by uid " +
-                             std::to_string(cred.uid) + " (pid " + std::to_string(cred.pid) +
-                             "), not by us (uid " + std::to_string(::geteuid()) +
-                             "); another user's process, not our mocapd");
-  }
-  std::string line(request_line);
-  if (line.empty() || line.back() != '\n') line += '\n';
-  if (!write_all(fd, line)) {
-    ::close(fd);
-    throw std::runtime_error("cannot send to mocapd at " + path);
-  }
-  std::string reply;
-  char buf[4096];
-  const int64_t deadline = monotonic_ns() + static_cast<int64_t>(timeout_ms) * 1000000;
-  for (;;) {
-    const int64_t left_ms = (deadline - monotonic_ns()) / 1000000;
-    pollfd p{fd, POLLIN, 0};
-    if (left_ms <= 0 || ::poll(&p, 1, static_cast<int>(left_ms)) <= 0) {
-      ::close(fd);
-      throw std::runtime_error("mocapd did not answer within " + std::to_string(timeout_ms) +
-                               " ms");
-    }
-    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    reply.append(buf, static_cast<size_t>(n));
-    if (reply.size() > (1u << 24)) break;
-  }
-  ::close(fd);
-  while (!reply.empty() && (reply.back() == '\n' || reply.back() == '\r'))
-    reply.pop_back();
-  return reply;
+  return unix_line_call(path, request_line, timeout_ms, "mocapd");
 }
 
 }  // namespace mocap::daemon

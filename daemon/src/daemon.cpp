@@ -74,8 +74,7 @@ void Daemon::start() {
   if (parts_.device_factory) {
     for (size_t i = 0; i < cfg_.sensors.size(); ++i) {
       const auto& s = cfg_.sensors[i];
-      auto dev = parts_.device_factory(device_spec(cfg_, i),
-                                       log_.child(s.name, log_level_of(s.log_level)));
+      auto dev = parts_.device_factory(device_spec(cfg_, i), log_.child(s.name, s.log_level));
       dev->start(*pipeline_);
       devices_.push_back(std::move(dev));
     }

@@ -8,22 +8,27 @@
 #include "mocap/daemon/demo.hpp"
 #include "mocap/daemon/outputs.hpp"
 #include "mocap/daemon/recorder.hpp"
-#include "mocap/daemon/replay.hpp"
+#include "mocap/daemon/replay_run.hpp"
 #include "mocap/daemon/rig_engine.hpp"
 #include "mocap/skeleton/calibration.hpp"
 
 namespace mocap::daemon {
 
-Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log) {
-  Daemon::Parts parts;
+LiveSetup make_live(const Config& given, bool demo, Logger& log) {
+  LiveSetup live{given, {}};
+  Config& cfg = live.cfg;
+  Daemon::Parts& parts = live.parts;
   if (demo) {
-    parts.services.push_back(make_demo(cfg, log.child("demo", log.level())));
+    Demo d = make_demo(given, log.child("demo", log.level()));
+    cfg = std::move(d.rig);
+    parts.services.push_back(std::move(d.service));
     parts.frame_flags |= kFrameDemo;
     log.info("demo: %zu simulated sensors (%s path, %s protocol, motion '%s')", cfg.sensors.size(),
-             cfg.demo.path.c_str(), cfg.demo.protocol.c_str(), cfg.demo.motion.c_str());
+             std::string(to_string(cfg.demo.path)).c_str(), cfg.demo.protocol.c_str(),
+             cfg.demo.motion.c_str());
   }
   parts.engine = std::make_unique<RigEngine>(cfg, &log);
-  if (!(demo && cfg.demo.path == "direct"))
+  if (!(demo && cfg.demo.path == DemoPath::direct))
     parts.device_factory = [](const DeviceSpec& spec, Logger l) {
       return make_device(spec, std::move(l));
     };
@@ -42,7 +47,7 @@ Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log) {
         }
       },
       log.child("recorder", log.level()));
-  return parts;
+  return live;
 }
 
 int run_replay_daemon(const std::string& path, double speed, const Config* rig,
@@ -50,26 +55,11 @@ int run_replay_daemon(const std::string& path, double speed, const Config* rig,
   try {
     std::unique_ptr<SampleSource> src =
         std::make_unique<PrefetchSource>(open_sample_source(path, rig));
-    Config cfg = src->config();
-    if (!rig) {
-      ConfigErrors errs;
-      std::optional<Config> changed = with_overrides(cfg, sets, path + " (configuration)", errs);
-      if (!changed) {
-        log.error("%s", errs.to_string().c_str());
-        return 1;
-      }
-      cfg = *changed;
-    }
-    // A replay uses the session's own calibration and never writes the live calibration file.
-    cfg.calibration.file.clear();
-    RigEngine engine(cfg, &log);
-    if (const std::string ct = src->calibration_text(); !ct.empty())
-      engine.tracker().set_calibration(parse_calibration(ct, path + " (calibration)"));
-    PipelineCore core(cfg.pipeline, cfg.calibration, sensor_infos(cfg), engine);
-    core.set_frame_flag(kFrameReplay, true);
+    ReplayRun run(replay_config(*src, rig != nullptr, sets, path), *src, path, true, &log);
+    const Config& cfg = run.cfg;
     auto sinks = make_outputs(cfg, log);
     for (auto& s : sinks)
-      core.add_sink(s.get());
+      run.core.add_sink(s.get());
     ReplayOptions opt;
     opt.speed = speed;
     opt.cancelled = [signal_fd] {
@@ -77,7 +67,7 @@ int run_replay_daemon(const std::string& path, double speed, const Config* rig,
       return ::poll(&p, 1, 0) > 0;
     };
     log.info("replaying %s (%zu sensors) at speed %g", path.c_str(), cfg.sensors.size(), speed);
-    const ReplayResult r = run_replay(*src, core, opt);
+    const ReplayResult r = run_replay(*src, run.core, opt);
     log.info("replay %s: %llu samples, %llu frames, %.1f s of session",
              r.cancelled ? "cancelled" : "done", static_cast<unsigned long long>(r.samples),
              static_cast<unsigned long long>(r.frames), (r.t_last_ns - r.t_first_ns) * 1e-9);

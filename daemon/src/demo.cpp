@@ -26,7 +26,9 @@ namespace {
 
 class DemoService final : public Service {
  public:
-  DemoService(Config& cfg, Logger log) : log_(std::move(log)), direct_(cfg.demo.path == "direct") {
+  /// Fills `cfg`, the demo's own rig (Demo::rig), with the performer's sensors.
+  DemoService(Config& cfg, Logger log)
+      : log_(std::move(log)), direct_(cfg.demo.path == DemoPath::direct) {
     sim::PerformerParams p;
     p.seed = cfg.demo.seed;
     p.rate_hz = cfg.demo.rate_hz;
@@ -188,8 +190,10 @@ class DemoService final : public Service {
 
 }  // namespace
 
-std::unique_ptr<Service> make_demo(Config& cfg, Logger log) {
-  return std::make_unique<DemoService>(cfg, std::move(log));
+Demo make_demo(const Config& cfg, Logger log) {
+  Demo d{cfg, nullptr};
+  d.service = std::make_unique<DemoService>(d.rig, std::move(log));
+  return d;
 }
 
 }  // namespace mocap::daemon

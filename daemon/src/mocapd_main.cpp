@@ -36,6 +36,8 @@ int main(int argc, char** argv) {
       .option("config", "rig configuration (TOML)")
       .option("check-config", "validate a configuration file and exit")
       .flag("print-config", "print the effective configuration (defaults included) and exit")
+      .flag("print-config-reference",
+            "print the configuration keys' reference (markdown, as in docs/configuration.md)")
       .multi("set", "override a configuration key, e.g. --set outputs.json.port=7400")
       .flag("demo", "run the virtual performer's simulated sensors (config/demo.toml rig)")
       .option("replay", "play a recorded session through the pipeline and exit")
@@ -50,8 +52,15 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (args.has("help") || !args.positional().empty()) {
-    std::printf("%s%s", kUsage, args.help().c_str());
+    std::printf(
+        "%s%sconfiguration keys (--set SECTION.KEY=VALUE; --print-config-reference "
+        "describes each):\n%s",
+        kUsage, args.help().c_str(), config_key_summary().c_str());
     return args.has("help") ? 0 : 2;
+  }
+  if (args.has("print-config-reference")) {
+    std::printf("%s", config_reference_markdown().c_str());
+    return 0;
   }
   std::vector<std::string> sets = args.get_all("set");
   if (auto lvl = args.get("log-level")) sets.push_back("daemon.log_level=" + *lvl);
@@ -105,7 +114,7 @@ int main(int argc, char** argv) {
   const int sfd = signalfd(-1, &sigs, SFD_CLOEXEC | SFD_NONBLOCK);
 
   LogSink sink(stderr);
-  Logger log(sink, "mocapd", log_level_of(cfg->daemon.log_level));
+  Logger log(sink, "mocapd", cfg->daemon.log_level);
 
   if (auto replay = args.get("replay")) {
     double speed = 1.0;
@@ -132,7 +141,8 @@ int main(int argc, char** argv) {
   }
 
   try {
-    Daemon d(*cfg, make_live_parts(*cfg, args.has("demo"), log), log);
+    LiveSetup live = make_live(*cfg, args.has("demo"), log);
+    Daemon d(live.cfg, std::move(live.parts), log);
     d.start();
     d.wait(sfd);
     signalfd_siginfo si{};

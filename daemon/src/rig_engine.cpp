@@ -5,20 +5,9 @@
 #include <stdexcept>
 
 #include "mocap/core/segments.hpp"
-#include "mocap/filter/filter_param_names.hpp"
 #include "mocap/skeleton/body_model.hpp"
 
 namespace mocap::daemon {
-
-FilterParams filter_params(const FilterConfig& f) {
-  FilterParams p;
-  for (const auto& [k, v] : f.params) {
-    std::string err;
-    if (!set_filter_param(p, k + "=" + v, err))
-      throw std::invalid_argument("filter." + k + ": " + err);
-  }
-  return p;
-}
 
 std::vector<rig::TrackerSensor> tracker_sensors(const Config& cfg) {
   std::vector<rig::TrackerSensor> out;
@@ -35,7 +24,7 @@ std::vector<rig::TrackerSensor> tracker_sensors(const Config& cfg) {
 
 rig::TrackerOptions tracker_options(const Config& cfg) {
   rig::TrackerOptions o;
-  o.filter = filter_params(cfg.filter);
+  o.filter = cfg.filter.params;
   o.use_mag = cfg.filter.use_mag;
   o.skeleton.root.pinned = !cfg.body.root_motion;
   o.skeleton.stale_after_ns = static_cast<int64_t>(cfg.pipeline.stale_after_ms * 1e6);
@@ -43,9 +32,7 @@ rig::TrackerOptions tracker_options(const Config& cfg) {
   c.capture_s = cfg.calibration.capture_s;
   const auto& a = cfg.calibration.heading_axis_sensor;
   c.heading_axis_sensor = Eigen::Vector3d(a[0], a[1], a[2]);
-  c.heading = cfg.calibration.heading == "mean_sensors"    ? HeadingSource::mean_sensors
-              : cfg.calibration.heading == "mount_normals" ? HeadingSource::mount_normals
-                                                           : HeadingSource::pelvis_sensor;
+  c.heading = cfg.calibration.heading;
   return o;
 }
 

@@ -13,12 +13,11 @@
 #include <cmath>
 #include <cstring>
 
+#include "mocap/core/units.hpp"
 #include "mocap/daemon/osc.hpp"
 
 namespace mocap::daemon {
 namespace {
-
-constexpr double kVrchatRadToDeg = 180.0 / M_PI;
 
 /// Wraps degrees to (-180, 180].
 double vrchat_wrap_deg(double a) {
@@ -44,9 +43,8 @@ std::array<float, 3> unity_euler_deg(const std::array<double, 4>& q) noexcept {
     c = 0.0;
     b = std::atan2(-r(2, 0), r(0, 0));
   }
-  return {static_cast<float>(a * kVrchatRadToDeg),
-          static_cast<float>(vrchat_wrap_deg(b * kVrchatRadToDeg)),
-          static_cast<float>(vrchat_wrap_deg(c * kVrchatRadToDeg))};
+  return {static_cast<float>(a * kDegPerRad), static_cast<float>(vrchat_wrap_deg(b * kDegPerRad)),
+          static_cast<float>(vrchat_wrap_deg(c * kDegPerRad))};
 }
 
 bool vrchat_tracker_from_frame(const PoseFrame& f, int s, double scale,

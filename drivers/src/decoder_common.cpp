@@ -6,11 +6,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "mocap/core/units.hpp"
+
 namespace mocap {
 
 DecoderCommon::DecoderCommon(const DeviceSpec& spec, SensorRange range)
     : sensor_id(spec.first_sensor_id),
-      gyr_max_rad_s_(option_double(spec, "gyr_range_dps", range.gyr_dps) * M_PI / 180),
+      gyr_max_rad_s_(option_double(spec, "gyr_range_dps", range.gyr_dps) * kRadPerDeg),
       acc_max_m_s2_(option_double(spec, "acc_range_g", range.acc_g) * 9.80665),
       remap_(AxisRemap::parse(spec.axis_remap)) {
   if (!(gyr_max_rad_s_ > 0) || !(acc_max_m_s2_ > 0))

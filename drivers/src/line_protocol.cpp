@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "mocap/core/units.hpp"
+
 namespace mocap::line {
 
 static bool is_sep(char c) {
@@ -105,7 +107,7 @@ static bool unit_factor(std::string_view key, std::string_view v, Units& u) {
     if (v == "mg") return u.acc_to_m_s2 = 9.80665e-3, true;
     if (v == "m/s2") return u.acc_to_m_s2 = 1, true;
   } else if (key == "gyr") {
-    if (v == "dps") return u.gyr_to_rad_s = M_PI / 180, true;
+    if (v == "dps") return u.gyr_to_rad_s = kRadPerDeg, true;
     if (v == "mdps") return u.gyr_to_rad_s = M_PI / 180e3, true;
     if (v == "rad/s") return u.gyr_to_rad_s = 1, true;
   } else if (key == "mag") {

@@ -8,10 +8,7 @@
 namespace mocap {
 namespace {
 
-struct Entry {
-  const char* name;
-  std::variant<double FilterParams::*, bool FilterParams::*> member;
-};
+using Entry = FilterParamEntry;
 
 #define D(n)             \
   Entry {                \
@@ -73,6 +70,10 @@ const Entry kEntries[] = {D(tau_acc_s),
 #undef D
 
 }  // namespace
+
+std::span<const FilterParamEntry> filter_param_table() {
+  return kEntries;
+}
 
 bool set_filter_param(FilterParams& p, std::string_view a, std::string& error) {
   const size_t eq = a.find('=');

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "mocap/core/segments.hpp"
+#include "mocap/core/units.hpp"
 #include "mocap/skeleton/sensor_sites.hpp"
 
 namespace mocap::rig {
@@ -205,7 +206,7 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
 
 void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   constexpr int64_t kEveryNs = 100'000'000;  // 10 Hz: the alignment is a slow constant
-  constexpr double kMinTurnRad = 0.1 * std::numbers::pi / 180;
+  constexpr double kMinTurnRad = 0.1 * kRadPerDeg;
   if (t_ns - heading_applied_t_ns_ < kEveryNs) return;
   heading_applied_t_ns_ = t_ns;
   Calibration c = skeleton_.calibration();
@@ -217,10 +218,9 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
     // The sensor's frame turns by yaw; its mounting keeps the segment's calibration pose:
     // q_ss' = q_ss T^-1 Y^-1 T with T the segment's orientation at calibration.
     const Eigen::Quaterniond y(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
-    const Eigen::Quaterniond t =
-        Eigen::Quaterniond(
-            Eigen::AngleAxisd(c.heading_deg * std::numbers::pi / 180, Eigen::Vector3d::UnitZ())) *
-        q_body_segment_in_pose(c.pose, s);
+    const Eigen::Quaterniond t = Eigen::Quaterniond(Eigen::AngleAxisd(c.heading_deg * kRadPerDeg,
+                                                                      Eigen::Vector3d::UnitZ())) *
+                                 q_body_segment_in_pose(c.pose, s);
     c.q_correction[s] = (y * c.q_correction[s]).normalized();
     c.q_sensor_segment[s] =
         (c.q_sensor_segment[s] * t.conjugate() * y.conjugate() * t).normalized();

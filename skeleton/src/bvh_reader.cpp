@@ -186,13 +186,13 @@ void BvhClip::global_pose(int k, std::vector<Eigen::Quaterniond>& q,
           t.z() = x;
           break;
         case BvhChannel::xrot:
-          r = r * axis_rotation(0, x * kDegToRad);
+          r = r * axis_rotation(0, x * kRadPerDeg);
           break;
         case BvhChannel::yrot:
-          r = r * axis_rotation(1, x * kDegToRad);
+          r = r * axis_rotation(1, x * kRadPerDeg);
           break;
         case BvhChannel::zrot:
-          r = r * axis_rotation(2, x * kDegToRad);
+          r = r * axis_rotation(2, x * kRadPerDeg);
           break;
       }
     }

@@ -38,12 +38,12 @@ Eigen::Vector3d zxy_degrees_from_rotation(const Eigen::Quaterniond& q) {
     y = 0;
     z = std::atan2(r(1, 0), r(0, 0));
   }
-  return Eigen::Vector3d(z, x, y) * kRadToDeg;
+  return Eigen::Vector3d(z, x, y) * kDegPerRad;
 }
 
 Eigen::Quaterniond rotation_from_zxy_degrees(double z_deg, double x_deg, double y_deg) {
-  return axis_rotation(2, z_deg * kDegToRad) * axis_rotation(0, x_deg * kDegToRad) *
-         axis_rotation(1, y_deg * kDegToRad);
+  return axis_rotation(2, z_deg * kRadPerDeg) * axis_rotation(0, x_deg * kRadPerDeg) *
+         axis_rotation(1, y_deg * kRadPerDeg);
 }
 
 std::string bvh_hierarchy(const BodyModel& model, double upm) {

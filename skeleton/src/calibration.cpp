@@ -115,7 +115,7 @@ CalibrationResult Calibrator::finish() {
     const Eigen::Vector4d v = es.eigenvectors().col(3);
     const double lam = std::clamp(es.eigenvalues()[3] / a.n, 0.0, 1.0);
     mean[i] = to_quat(v);
-    r.motion_deg[i] = 2.0 * std::acos(std::sqrt(lam)) * kRadToDeg;
+    r.motion_deg[i] = 2.0 * std::acos(std::sqrt(lam)) * kDegPerRad;
     worst_motion = std::max(worst_motion, r.motion_deg[i]);
     if (r.motion_deg[i] > opt_.max_motion_deg) {
       msg << name(static_cast<Segment>(i)) << ": moved " << r.motion_deg[i] << " deg RMS (max "
@@ -125,7 +125,7 @@ CalibrationResult Calibrator::finish() {
     if (a.n_acc > 0) {
       const Eigen::Vector3d f = a.acc_earth / a.n_acc;
       const double tilt =
-          std::acos(std::clamp(f.z() / std::max(f.norm(), 1e-9), -1.0, 1.0)) * kRadToDeg;
+          std::acos(std::clamp(f.z() / std::max(f.norm(), 1e-9), -1.0, 1.0)) * kDegPerRad;
       r.gravity_error_deg[i] = tilt;
       worst_grav = std::max(worst_grav, tilt);
       if (tilt > opt_.max_gravity_error_deg) {
@@ -168,7 +168,7 @@ CalibrationResult Calibrator::finish() {
     const Eigen::Vector3d n_earth = mean[i] * opt_.heading_axis_sensor.normalized();
     dev[i] = std::abs(std::asin(std::clamp(n_earth.z(), -1.0, 1.0)) -
                       std::asin(std::clamp(n_pose.z(), -1.0, 1.0))) *
-             kRadToDeg;
+             kDegPerRad;
     if (worst_dev < 0 || dev[i] > dev[worst_dev]) worst_dev = i;
   }
   bool independent_unaligned = false;
@@ -207,7 +207,7 @@ CalibrationResult Calibrator::finish() {
       break;
     }
     case HeadingSource::explicit_heading:
-      heading_rad = opt_.explicit_heading_deg * kDegToRad;
+      heading_rad = opt_.explicit_heading_deg * kRadPerDeg;
       break;
     case HeadingSource::mount_normals: {
       // Each horizontal normal gives one heading (weighted alike; near-vertical sites such as
@@ -253,7 +253,7 @@ CalibrationResult Calibrator::finish() {
         heading_rad = 0;
         if (any_shared) {
           heading_rad = circular_mean(0, 4 * M_PI, used);
-          heading_rad = circular_mean(heading_rad, kMaxNormalSpreadDeg * kDegToRad, used);
+          heading_rad = circular_mean(heading_rad, kMaxNormalSpreadDeg * kRadPerDeg, used);
         }
         // Each own-frame sensor aligned on its own normal onto that body heading.
         int aligned = 0;
@@ -271,7 +271,8 @@ CalibrationResult Calibrator::finish() {
         break;
       }
       heading_rad = circular_mean(0, 4 * M_PI, used);
-      if (used > 0) heading_rad = circular_mean(heading_rad, kMaxNormalSpreadDeg * kDegToRad, used);
+      if (used > 0)
+        heading_rad = circular_mean(heading_rad, kMaxNormalSpreadDeg * kRadPerDeg, used);
       if (used == 0) {
         r.message =
             "calibration refused: no sensor with a known horizontal mount normal agrees on the "
@@ -297,7 +298,7 @@ CalibrationResult Calibrator::finish() {
       for (int s : {index(Segment::upper_arm_l), index(Segment::upper_arm_r)}) {
         if (!rig_.tracked(s)) continue;
         const Eigen::AngleAxisd d(mean[s] * npose_mean_[s].conjugate());
-        const double ang_deg = d.angle() * kRadToDeg;
+        const double ang_deg = d.angle() * kDegPerRad;
         if (ang_deg < 60 || ang_deg > 120) {
           r.message = "calibration refused: " + std::string(name(static_cast<Segment>(s))) +
                       " rose " + std::to_string(ang_deg) +
@@ -323,7 +324,7 @@ CalibrationResult Calibrator::finish() {
   c.valid = true;
   c.pose = pose_;
   c.heading_source = opt_.heading;
-  c.heading_deg = heading_rad * kRadToDeg;
+  c.heading_deg = heading_rad * kDegPerRad;
   c.motion_deg = worst_motion;
   c.gravity_error_deg = worst_grav;
   const Eigen::Quaterniond q_earth_body = yaw_rotation(heading_rad);

@@ -115,9 +115,9 @@ JointCheck check_joint(const JointLimit& l, const Eigen::Quaterniond& q,
     return c;
   }
   const SwingTwist st = swing_twist(q, l.twist_axis);
-  const double a = st.swing_rad[l.axis_a] * kRadToDeg;
-  const double b = st.swing_rad[l.axis_b] * kRadToDeg;
-  const double t = st.twist_rad * kRadToDeg;
+  const double a = st.swing_rad[l.axis_a] * kDegPerRad;
+  const double b = st.swing_rad[l.axis_b] * kDegPerRad;
+  const double t = st.twist_rad * kDegPerRad;
   c.a_deg = a;
   c.b_deg = b;
   c.twist_deg = t;
@@ -146,10 +146,10 @@ JointCheck check_joint(const JointLimit& l, const Eigen::Quaterniond& q,
     return c;
   }
   Eigen::Vector3d sw = Eigen::Vector3d::Zero();
-  sw[l.axis_a] = ca * kDegToRad;
-  sw[l.axis_b] = cb * kDegToRad;
+  sw[l.axis_a] = ca * kRadPerDeg;
+  sw[l.axis_b] = cb * kRadPerDeg;
   const Eigen::Quaterniond qc =
-      from_rotation_vector(sw) * axis_rotation(l.twist_axis, ct * kDegToRad);
+      from_rotation_vector(sw) * axis_rotation(l.twist_axis, ct * kRadPerDeg);
   c.violation_deg = angle_between_deg(q, qc);
   c.violated = true;
   if (clamped) *clamped = qc;

@@ -60,7 +60,7 @@ void Skeleton::reset_heading(const double* target_heading_deg) {
   for (int i = 0; i < kSegmentCount; ++i)
     have[i] = have_[i] && !dead_[i] && rig_.tracked(i);
   if (target_heading_deg) {
-    const double rad = *target_heading_deg * kDegToRad;
+    const double rad = *target_heading_deg * kRadPerDeg;
     apply_heading_reset(calib_, q_es_, have, &rad);
   } else {
     apply_heading_reset(calib_, q_es_, have);

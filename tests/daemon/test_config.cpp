@@ -73,10 +73,10 @@ TEST(Config, CalibrationHeadingSourceAndSiteNormals) {
   ConfigErrors errs;
   auto d = parse("", errs);
   ASSERT_TRUE(d) << errs.to_string();
-  EXPECT_EQ(d->calibration.heading, "mount_normals");  // the default
+  EXPECT_EQ(d->calibration.heading, mocap::HeadingSource::mount_normals);  // the default
   auto c = parse(kRig, errs, {"calibration.heading=pelvis_sensor"});
   ASSERT_TRUE(c) << errs.to_string();
-  EXPECT_EQ(c->calibration.heading, "pelvis_sensor");
+  EXPECT_EQ(c->calibration.heading, mocap::HeadingSource::pelvis_sensor);
   EXPECT_FALSE(c->sensors[0].site_normal);  // the segment's standard site
   ASSERT_TRUE(c->sensors[1].site_normal);
   EXPECT_DOUBLE_EQ((*c->sensors[1].site_normal)[1], 1.0);
@@ -320,22 +320,18 @@ TEST(Config, ValidatorsReportAtTheKey) {
   v.sensor = [](const SensorConfig& s) {
     return s.driver == "witmotion" ? std::string() : "unknown driver '" + s.driver + "'";
   };
-  v.filter_param = [](const std::string& name, const std::string&) {
-    return name == "tau_mag_s" ? std::string() : "unknown filter parameter";
-  };
-  v.filter_param_names = {"tau_mag_s", "tau_acc_s"};
   ConfigErrors errs;
   auto c = parse_config(
       "[filter]\ntau_mag_s = 12\nuse_mag = false\n[[sensor]]\nname=\"a\"\n"
       "driver=\"witmotion\"\nport=\"/dev/x\"\n",
       "rig.toml", {}, errs, &v);
   ASSERT_TRUE(c) << errs.to_string();
-  EXPECT_EQ(c->filter.params.at("tau_mag_s"), "12");
+  EXPECT_EQ(c->filter.params.tau_mag_s, 12.0);
   EXPECT_FALSE(c->filter.use_mag);
   // Round trip through print-config keeps the filter parameter as a number.
   auto c2 = parse_config(config_to_toml(*c), "printed", {}, errs, &v);
   ASSERT_TRUE(c2) << errs.to_string();
-  EXPECT_EQ(c2->filter.params.at("tau_mag_s"), "12");
+  EXPECT_EQ(c2->filter.params.tau_mag_s, 12.0);
 
   c = parse_config(
       "[filter]\ntau_acc_z = 1.0\n[[sensor]]\nname=\"a\"\ndriver=\"bogus\"\n"
@@ -343,8 +339,7 @@ TEST(Config, ValidatorsReportAtTheKey) {
       "rig.toml", {}, errs, &v);
   ASSERT_FALSE(c);
   const std::string all = errs.to_string();
-  EXPECT_NE(all.find("rig.toml:2:13: filter.tau_acc_z: unknown filter parameter (did you mean "
-                     "'tau_acc_s'?)"),
+  EXPECT_NE(all.find("rig.toml:2:13: filter.tau_acc_z: unknown key (did you mean 'tau_acc_s'?)"),
             std::string::npos)
       << all;
   EXPECT_NE(all.find("rig.toml:5:8: sensor[0].driver: unknown driver 'bogus'"), std::string::npos)

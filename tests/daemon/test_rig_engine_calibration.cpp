@@ -166,7 +166,7 @@ TEST(DaemonCalibrationHeading, MountNormalsByDefaultAndSiteNormalsFromTheConfig)
   EXPECT_NEAR(turned.heading_deg, normals.heading_deg - 20, 0.5);
   // The pelvis belt clip as the heading source: recorded as such.
   cfg.sensors = performer_sensors();
-  cfg.calibration.heading = "pelvis_sensor";
+  cfg.calibration.heading = HeadingSource::pelvis_sensor;
   const Eigen::Vector3d axis = sim::pelvis_forward_axis_sensor();
   cfg.calibration.heading_axis_sensor = {axis.x(), axis.y(), axis.z()};
   const Calibration pelvis = npose_calibration(cfg);

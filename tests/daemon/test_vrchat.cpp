@@ -19,6 +19,7 @@
 #include <sstream>
 #include <string>
 
+#include "mocap/core/units.hpp"
 #include "mocap/daemon/vrchat.hpp"
 
 using namespace mocap;
@@ -29,7 +30,7 @@ using mocap::daemon::VrchatTracker;
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kDeg = kRadPerDeg;
 
 void set_segment(PoseFrame& f, Segment s, const Eigen::Quaterniond& q,
                  const Eigen::Vector3d& p = Eigen::Vector3d::Zero()) {

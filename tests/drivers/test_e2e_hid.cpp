@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "collect_sink.hpp"
+#include "mocap/core/units.hpp"
 #include "mocap/devsim/sim_transport.hpp"
 #include "mocap/drivers/joycon.hpp"
 #include "mocap/drivers/playstation.hpp"
@@ -174,7 +175,7 @@ double gyro_x_dps_after(const std::vector<std::vector<uint8_t>>& replies) {
     dec->feed(r, 0, sink);
   dec->feed(full_report(1, 4096, 1000), 0, sink);
   EXPECT_EQ(sink.samples.size(), 3u);
-  return sink.samples.empty() ? 0 : sink.samples[0].gyr_rad_s.x() * 180 / M_PI;
+  return sink.samples.empty() ? 0 : sink.samples[0].gyr_rad_s.x() * kDegPerRad;
 }
 }  // namespace
 

@@ -7,12 +7,13 @@
 
 #include <Eigen/Geometry>
 
+#include "mocap/core/units.hpp"
 #include "mocap/rig/heading_from_motion.hpp"
 
 namespace mocap::rig {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180;
+constexpr double kDeg = kRadPerDeg;
 const int kShank = index(Segment::shank_r), kFoot = index(Segment::foot_r);
 
 std::array<int, kSegmentCount> foot_follows_shank() {

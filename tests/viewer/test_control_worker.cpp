@@ -119,7 +119,7 @@ TEST(ControlWorker, AbsentDaemonIsAFailedOutcome) {
   worker.request("reset-heading", "HEADING RESET");
   const auto m = wait_for([&] { return worker.take_message(); });
   ASSERT_TRUE(m);
-  EXPECT_NE(m->find("HEADING RESET: FAILED (daemon not reachable at /nonexistent/mocapd.sock"),
+  EXPECT_NE(m->find("HEADING RESET: FAILED (cannot reach mocapd at /nonexistent/mocapd.sock"),
             std::string::npos)
       << *m;
   EXPECT_EQ(worker.prompt(), "");

@@ -162,32 +162,28 @@ int export_poses(SessionReader& r, const std::string& in, const std::string& out
   if (format != Format::csv && rate_hz <= 0) rate_hz = cfg.pipeline.rate_hz;
   FinishedPoses poses(body.dimensions(), rate_hz);
   long frames = 0;
+  // Every finished frame into one of the motion writers, then close it.
+  const auto write_all = [&](auto& writer) {
+    poses.run(r, [&](const PoseFrame& f) {
+      writer.write_frame(f);
+      ++frames;
+    });
+    writer.close();
+  };
   try {
     if (format == Format::gltf) {
       GltfWriterOptions opt;
       opt.frame_time_s = 1.0 / rate_hz;
       GltfWriter writer(out, body, opt);
-      poses.run(r, [&](const PoseFrame& f) {
-        writer.write_frame(f);
-        ++frames;
-      });
-      writer.close();
+      write_all(writer);
     } else if (format == Format::opensim) {
       OpenSimWriter writer(out, {.rate_hz = rate_hz});
-      poses.run(r, [&](const PoseFrame& f) {
-        writer.write_frame(f);
-        ++frames;
-      });
-      writer.close();
+      write_all(writer);
     } else if (format == Format::bvh) {
       BvhWriterOptions opt;
       opt.frame_time_s = 1.0 / rate_hz;
       BvhWriter writer(out, body, opt);
-      poses.run(r, [&](const PoseFrame& f) {
-        writer.write_frame(f);
-        ++frames;
-      });
-      writer.close();
+      write_all(writer);
     } else {
       std::FILE* f = std::fopen(out.c_str(), "w");
       if (!f) throw std::runtime_error("cannot create '" + out + "': " + std::strerror(errno));

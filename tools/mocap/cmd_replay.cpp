@@ -14,7 +14,7 @@
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/poses_csv.hpp"
 #include "mocap/daemon/prefetch_source.hpp"
-#include "mocap/daemon/replay.hpp"
+#include "mocap/daemon/replay_run.hpp"
 #include "mocap/daemon/rig_engine.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
@@ -132,27 +132,12 @@ int run_replay(int argc, char** argv) {
       src = open_sample_source(input, rig ? &*rig : nullptr);
     // Read and decode the file on the other core while this one filters and solves.
     src = std::make_unique<PrefetchSource>(std::move(src));
-    Config cfg = src->config();
-    if (!rig) {
-      // --set without --rig: applied to the input's own configuration (recorded, or the
-      // segment-named sensors of a CSV).
-      ConfigErrors errs;
-      std::optional<Config> with_sets = with_overrides(cfg, sets, input + " (configuration)", errs);
-      if (!with_sets) {
-        std::fprintf(stderr, "%s", errs.to_string().c_str());
-        return 1;
-      }
-      cfg = *with_sets;
-    }
-    // Calibrate immediately at the chosen moment (the file is the countdown).
-    cfg.calibration.countdown_s = 0;
-    // A replay uses the session's own calibration and never writes the live calibration file.
-    cfg.calibration.file.clear();
-    RigEngine engine(cfg);
-    if (const std::string ct = src->calibration_text(); !ct.empty() && !opt.calibrate_pose)
-      engine.tracker().set_calibration(parse_calibration(ct, input + " (calibration)"));
-    PipelineCore core(cfg.pipeline, cfg.calibration, sensor_infos(cfg), engine);
-    core.set_frame_flag(kFrameReplay, true);
+    // --set without --rig: applied to the input's own configuration.
+    ReplayRun run(replay_config(*src, rig.has_value(), sets, input), *src, input,
+                  !opt.calibrate_pose);
+    const Config& cfg = run.cfg;
+    RigEngine& engine = run.engine;
+    PipelineCore& core = run.core;
     std::unique_ptr<BvhSink> bvh;
     std::unique_ptr<PosesCsvSink> poses;
     if (auto p = args.get("bvh")) {

@@ -12,10 +12,15 @@
 #include <vector>
 
 #include "mocap/core/log.hpp"
+#include "mocap/filter/attitude_filter.hpp"
 #include "mocap/skeleton/body_model.hpp"
+#include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 
 namespace mocap::daemon {
+
+// The keys' ranges, units and help text are in daemon/src/config_keys.cpp (one table per
+// section); the structs below hold each key's value and its default.
 
 /// One sensor of the rig (one device carrying one IMU).
 struct SensorConfig {
@@ -38,15 +43,15 @@ struct SensorConfig {
   /// gyro-scale`): the gyro reads scale * rate, so samples are divided by it. Absent:
   /// uncalibrated (the skeleton then expects the gyros' scale errors after turns).
   std::optional<std::array<double, 3>> gyr_scale;
-  std::string log_level = "info";
+  LogLevel log_level = LogLevel::info;
   std::map<std::string, std::string> options;  ///< protocol options
 };
 
-/// Attitude filter settings: use_mag, plus any parameter of the filter module's FilterParams
-/// by name (e.g. tau_mag_s = 12), kept as text and applied with set_filter_param.
+/// Attitude filter settings: use_mag, plus the filter's parameters (file keys: the FilterParams
+/// member names, e.g. tau_mag_s = 12).
 struct FilterConfig {
   bool use_mag = true;  ///< 9-D (magnetometer heading) or 6-D orientation
-  std::map<std::string, std::string> params;
+  FilterParams params;
 };
 
 struct BodyConfig {
@@ -60,15 +65,15 @@ struct BodyConfig {
 };
 
 struct CalibrationConfig {
-  std::string pose = "npose";  ///< "npose" or "tpose"
-  double countdown_s = 3.0;    ///< seconds from the command to the capture
-  double capture_s = 1.0;      ///< seconds averaged during the capture
-  std::string file;            ///< saved calibration loaded at start, written after each one
+  CalibrationPose pose = CalibrationPose::npose;
+  double countdown_s = 3.0;  ///< seconds from the command to the capture
+  double capture_s = 1.0;    ///< seconds averaged during the capture
+  std::string file;          ///< saved calibration loaded at start, written after each one
   /// Where the calibration's body heading comes from: "mount_normals" (every sensor lies flat
   /// on its site with z out of the skin; the heading is the circular mean over the sites'
   /// normals, so one sensor's misalignment counts 1/N), "pelvis_sensor" (the pelvis sensor's
   /// heading_axis_sensor points forward) or "mean_sensors" (that axis of every sensor does).
-  std::string heading = "mount_normals";
+  HeadingSource heading = HeadingSource::mount_normals;
   /// Body forward (+x) in the pelvis sensor's frame: the heading axis of a pelvis_sensor or
   /// mean_sensors calibration. Not a file key: the default suits a pelvis sensor worn with +x
   /// forward; the demo sets its performer's belt-clip axis.
@@ -130,12 +135,17 @@ struct RecordingConfig {
 };
 
 struct DaemonSection {
-  std::string log_level = "info";
+  LogLevel log_level = LogLevel::info;
   std::string control_socket;  ///< "" = "$XDG_RUNTIME_DIR/mocapd.sock"
 };
 
+/// How the demo's samples reach the pipeline: through simulated devices on ptys and the real
+/// drivers, or directly.
+enum class DemoPath : uint8_t { device, direct };
+std::string_view to_string(DemoPath p);
+
 struct DemoConfig {
-  std::string path = "device";         ///< "device" (simulated devices via ptys) or "direct"
+  DemoPath path = DemoPath::device;
   std::string protocol = "witmotion";  ///< wire protocol the simulated devices speak
   double rate_hz = 100.0;
   /// A virtual-performer motion (sim::motion_names() or a BVH file, optionally "calibrate+"):
@@ -188,17 +198,15 @@ struct ConfigErrors {
   std::string to_string() const;  ///< one line per error
 };
 
-/// Checks that need other modules (drivers, filter); each returns "" or a message. The loader
+/// Checks that need the drivers; each returns "" or a message. The loader
 /// reports a message at the offending key's position.
 struct ConfigValidators {
   std::function<std::string(const SensorConfig&)> sensor;  ///< e.g. unknown driver or option
   /// A sensor that loads but will not work as asked (e.g. a rate its baud cannot carry): ""
   /// or a warning, reported in ConfigErrors::warnings.
   std::function<std::string(const SensorConfig&)> sensor_warning;
-  std::function<std::string(const std::string& name, const std::string& value)> filter_param;
-  std::vector<std::string> filter_param_names;  ///< for "did you mean" suggestions
 };
-/// The real checks: drivers' make_decoder and the filter's parameter names.
+/// The real checks: drivers' make_decoder.
 const ConfigValidators& default_validators();
 
 /// Parses and validates TOML text. `overrides` are "key.path=VALUE" strings (from --set),
@@ -223,8 +231,11 @@ int edit_distance(std::string_view a, std::string_view b);
 /// The candidate nearest to `word`, or "" if none is plausibly meant.
 std::string nearest_name(std::string_view word, const std::vector<std::string_view>& candidates);
 
-/// Log level of a name validated by the loader.
-LogLevel log_level_of(std::string_view name);
+/// The key reference of docs/configuration.md (markdown: one table per section), written from
+/// the key tables (`mocapd --print-config-reference`).
+std::string config_reference_markdown();
+/// The keys by section, one line each, for `mocapd --help`.
+std::string config_key_summary();
 /// "<runtime dir>/mocapd.sock": $XDG_RUNTIME_DIR, else a private 0700 directory
 /// (mocap/core/runtime_dir.hpp). Throws std::runtime_error when there is none.
 std::string default_control_socket();

@@ -11,9 +11,14 @@
 
 namespace mocap::daemon {
 
-/// Parts of a live daemon. demo: cfg.sensors are replaced by the virtual performer's (see
-/// demo.hpp) and kFrameDemo is set. Throws std::runtime_error naming what failed.
-Daemon::Parts make_live_parts(Config& cfg, bool demo, Logger& log);
+/// A live daemon's configuration and parts.
+struct LiveSetup {
+  Config cfg;  ///< the given one, or with demo the demo's rig (demo.hpp)
+  Daemon::Parts parts;
+};
+/// The parts of a live daemon for `cfg`; demo: the virtual performer's sensors instead of the
+/// configured ones, and kFrameDemo set. Throws std::runtime_error naming what failed.
+LiveSetup make_live(const Config& cfg, bool demo, Logger& log);
 
 /// `mocapd --replay FILE --speed X`: plays the session through the pipeline to the configured
 /// outputs (frames flagged kFrameReplay), stopping early when signal_fd becomes readable.

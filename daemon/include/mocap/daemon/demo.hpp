@@ -12,9 +12,15 @@
 
 namespace mocap::daemon {
 
-/// Fills cfg.sensors with the performer's 15 sensors (named after their segments) and returns
-/// the service that produces their data. Device path: the sensors' ports are the ptys it made.
+/// The demo's rig and the service that produces its data.
+struct Demo {
+  /// The given configuration with the performer's 15 sensors (named after their segments;
+  /// device path: their ports are the ptys the service made), a BVH motion's segment lengths,
+  /// and the calibration fitted to the performer's N-pose stand.
+  Config rig;
+  std::unique_ptr<Service> service;
+};
 /// Throws std::runtime_error / std::invalid_argument (e.g. unknown motion or protocol).
-std::unique_ptr<Service> make_demo(Config& cfg, Logger log);
+Demo make_demo(const Config& cfg, Logger log);
 
 }  // namespace mocap::daemon

@@ -15,8 +15,6 @@
 
 namespace mocap::daemon {
 
-/// The filter parameters of a config (filter.* keys applied to the defaults).
-FilterParams filter_params(const FilterConfig& f);
 /// The body tracker's sensors and options for a rig config.
 std::vector<rig::TrackerSensor> tracker_sensors(const Config& cfg);
 rig::TrackerOptions tracker_options(const Config& cfg);

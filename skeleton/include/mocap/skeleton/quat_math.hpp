@@ -10,9 +10,6 @@
 
 namespace mocap {
 
-inline constexpr double kRadToDeg = kDegPerRad;
-inline constexpr double kDegToRad = kRadPerDeg;
-
 /// Angle of the rotation q, radians in [0, pi] (q and -q give the same angle).
 inline double rotation_angle_rad(const Eigen::Quaterniond& q) {
   const double v = q.vec().norm();
@@ -21,7 +18,7 @@ inline double rotation_angle_rad(const Eigen::Quaterniond& q) {
 
 /// Angle between two orientations, degrees in [0, 180].
 inline double angle_between_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
-  return rotation_angle_rad(a.conjugate() * b) * kRadToDeg;
+  return rotation_angle_rad(a.conjugate() * b) * kDegPerRad;
 }
 
 /// Spherical linear interpolation along the shorter arc: t = 0 gives a, t = 1 gives b (or -b).
