@@ -147,12 +147,15 @@ std::string Daemon::handle(const ControlRequest& r) {
   switch (r.command) {
     case ControlCommand::status:
       return status_json();
-    case ControlCommand::calibrate:
-      pipeline_->calibrate(r.argument == "tpose" ? CalibrationPose::tpose : CalibrationPose::npose);
-      ok["message"] = "calibration (" + r.argument + ") in " +
+    case ControlCommand::calibrate: {
+      // No pose named: the configured one (calibration.pose).
+      const std::string pose = r.argument.empty() ? cfg_.calibration.pose : r.argument;
+      pipeline_->calibrate(pose == "tpose" ? CalibrationPose::tpose : CalibrationPose::npose);
+      ok["message"] = "calibration (" + pose + ") in " +
                       std::to_string(static_cast<int>(std::lround(cfg_.calibration.countdown_s))) +
                       " s: hold the pose";
       return ok.dump();
+    }
     case ControlCommand::reset_heading:
       pipeline_->reset_heading();
       ok["message"] = "heading reset";

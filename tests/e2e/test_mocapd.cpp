@@ -214,13 +214,14 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   for (const char* source : {"samples", "raw"}) {
     const std::string p1 = (dir / (std::string(source) + "1.csv")).string();
     const std::string p2 = (dir / (std::string(source) + "2.csv")).string();
+    // --poses: the deprecated spelling of --csv, still accepted.
     ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mcap").string(), "--source", source,
                    "--poses", p1, "--quiet"},
                   &out),
               0)
         << out;
-    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mcap").string(), "--source", source,
-                   "--poses", p2, "--bvh", (dir / "a.bvh").string(), "--quiet"}),
+    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mcap").string(), "--source", source, "--csv",
+                   p2, "--bvh", (dir / "a.bvh").string(), "--quiet"}),
               0);
     const std::string a = slurp(p1), b = slurp(p2);
     EXPECT_GT(a.size(), 10000u);
@@ -276,8 +277,7 @@ TEST(Golden, RecordedSessionsReplayToExpectedPoses) {
     const std::string got_path =
         (fs::temp_directory_path() / ("mocap-golden-" + std::to_string(getpid()) + ".csv"))
             .string();
-    ASSERT_EQ(run({kBin + "mocap", "replay", e.path().string(), "--poses", got_path, "--quiet"}),
-              0);
+    ASSERT_EQ(run({kBin + "mocap", "replay", e.path().string(), "--csv", got_path, "--quiet"}), 0);
     std::ifstream want(expected), got(got_path);
     std::string lw, lg;
     int line = 0;
@@ -537,7 +537,7 @@ TEST(Score, ReplayOfARealClipIsScoredAgainstItsTruth) {
     const std::string poses = (dir / (std::string("p_") + use_mag + ".csv")).string();
     std::string out;
     ASSERT_EQ(run({kBin + "mocap", "replay", samples, "--calibrate", "npose@1.5", "--set",
-                   std::string("filter.use_mag=") + use_mag, "--poses", poses, "--quiet"},
+                   std::string("filter.use_mag=") + use_mag, "--csv", poses, "--quiet"},
                   &out),
               0)
         << out;

@@ -1,6 +1,6 @@
 // mocap replay: runs a recorded session or a CSV of samples offline through the daemon's
 // pipeline (filter -> calibration -> skeleton) and writes BVH and/or pose CSV.
-//   mocap replay INPUT [--rig RIG.toml] [--set K=V] [--bvh OUT.bvh] [--poses OUT.csv]
+//   mocap replay INPUT [--config RIG.toml] [--set K=V] [--bvh OUT.bvh] [--csv OUT.csv]
 //                [--calibrate npose@SECONDS|tpose@SECONDS] [--source raw|samples]
 #include <unistd.h>
 
@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/poses_csv.hpp"
@@ -71,62 +71,39 @@ bool parse_calibrate(const std::string& s, mocap::CalibrationPose& pose, double&
   return end && *end == '\0' && at + 1 < s.size() && at_s >= 0;
 }
 
-}  // namespace
+/// mocap replay's command line (declared in add_replay).
+struct ReplayCommandOptions {
+  std::string input, config, config_alias, bvh, csv, csv_alias, calibrate, source;
+  std::vector<std::string> sets;
+  bool quiet = false;
+};
 
-int run_replay(int argc, char** argv) {
-  CliArgs args;
-  args.flag("help", "show this help")
-      .option("rig",
-              "rig configuration (TOML); default: the recorded one, or segment-named sensors")
-      .multi("set", "override a configuration key (KEY=VALUE)")
-      .option("bvh", "write the motion as BVH")
-      .option("poses", "write poses as CSV: t,segment,w,x,y,z,px,py,pz")
-      .option("calibrate", "calibrate at a moment of the input: npose@SECONDS or tpose@SECONDS")
-      .option("source", "session files: replay 'raw' device bytes or recorded 'samples'")
-      .flag("quiet", "no progress bar");
-  if (!args.parse(argc, argv) || args.has("help") || args.positional().size() != 1) {
-    if (!args.error().empty()) std::fprintf(stderr, "mocap replay: %s\n", args.error().c_str());
-    std::fprintf(args.has("help") ? stdout : stderr,
-                 "usage: mocap replay INPUT(.mcap session | .csv samples) [options]\n%s",
-                 args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  const std::string input = args.positional()[0];
+int run_replay(const ReplayCommandOptions& o) {
+  const std::string& input = o.input;
+  const std::string rig_path = o.config.empty() ? o.config_alias : o.config;
+  const std::string csv_path = o.csv.empty() ? o.csv_alias : o.csv;
   std::optional<Config> rig;
-  const auto sets = args.get_all("set");
-  if (auto r = args.get("rig")) {
+  const auto& sets = o.sets;
+  if (!rig_path.empty()) {
     ConfigErrors errs;
-    rig = load_config(*r, sets, errs, &default_validators());
+    rig = load_config(rig_path, sets, errs, &default_validators());
     if (!rig) {
       std::fprintf(stderr, "%s", errs.to_string().c_str());
       return 1;
     }
   }
   ReplayOptions opt;
-  if (auto c = args.get("calibrate")) {
+  if (!o.calibrate.empty()) {
     mocap::CalibrationPose pose;
-    if (!parse_calibrate(*c, pose, opt.calibrate_at_s)) {
-      std::fprintf(stderr,
-                   "mocap replay: --calibrate needs npose@SECONDS or tpose@SECONDS, got '%s'\n",
-                   c->c_str());
-      return 2;
-    }
+    parse_calibrate(o.calibrate, pose, opt.calibrate_at_s);  // checked by the option
     opt.calibrate_pose = pose;
   }
-  SessionSource which = SessionSource::automatic;
-  if (auto s = args.get("source")) {
-    if (*s == "raw")
-      which = SessionSource::raw;
-    else if (*s == "samples")
-      which = SessionSource::samples;
-    else {
-      std::fprintf(stderr, "mocap replay: --source is raw or samples\n");
-      return 2;
-    }
-  }
+  const SessionSource which = o.source == "raw"       ? SessionSource::raw
+                              : o.source == "samples" ? SessionSource::samples
+                                                      : SessionSource::automatic;
   try {
     std::unique_ptr<SampleSource> src;
-    if (args.has("source"))
+    if (!o.source.empty())
       src = open_session_source(input, rig ? &*rig : nullptr, which);
     else
       src = open_sample_source(input, rig ? &*rig : nullptr);
@@ -134,7 +111,7 @@ int run_replay(int argc, char** argv) {
     src = std::make_unique<PrefetchSource>(std::move(src));
     Config cfg = src->config();
     if (!rig) {
-      // --set without --rig: applied to the input's own configuration (recorded, or the
+      // --set without --config: applied to the input's own configuration (recorded, or the
       // segment-named sensors of a CSV).
       ConfigErrors errs;
       std::optional<Config> with_sets = with_overrides(cfg, sets, input + " (configuration)", errs);
@@ -155,15 +132,15 @@ int run_replay(int argc, char** argv) {
     core.set_frame_flag(kFrameReplay, true);
     std::unique_ptr<BvhSink> bvh;
     std::unique_ptr<PosesCsvSink> poses;
-    if (auto p = args.get("bvh")) {
-      bvh = std::make_unique<BvhSink>(*p, cfg);
+    if (!o.bvh.empty()) {
+      bvh = std::make_unique<BvhSink>(o.bvh, cfg);
       core.add_sink(bvh.get());
     }
-    if (auto p = args.get("poses")) {
-      poses = std::make_unique<PosesCsvSink>(*p, 0);
+    if (!csv_path.empty()) {
+      poses = std::make_unique<PosesCsvSink>(csv_path, 0);
       core.add_sink(poses.get());
     }
-    const bool bar = !args.has("quiet") && isatty(STDERR_FILENO);
+    const bool bar = !o.quiet && isatty(STDERR_FILENO);
     if (bar) {
       opt.progress = [](double f) {
         const int w = 40, n = static_cast<int>(f * w);
@@ -199,6 +176,41 @@ int run_replay(int argc, char** argv) {
     std::fprintf(stderr, "mocap replay: %s\n", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+void add_replay(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<ReplayCommandOptions>();
+  CLI::App* c =
+      cli::add_command(app, "replay", "run a session or sample CSV through the pipeline offline");
+  c->add_option("INPUT", o->input, "a session (.mcap) or a CSV of samples")->required();
+  CLI::Option* config = c->add_option(
+      "--config", o->config,
+      "rig configuration (TOML); default: the recorded one, or segment-named sensors");
+  cli::add_deprecated_alias(*c, "--rig", o->config_alias, config);
+  cli::add_multi(*c, "--set", o->sets, "override a configuration key (KEY=VALUE)");
+  c->add_option("--bvh", o->bvh, "write the motion as BVH");
+  CLI::Option* csv =
+      c->add_option("--csv", o->csv, "write the poses as CSV: t,segment,w,x,y,z,px,py,pz");
+  cli::add_deprecated_alias(*c, "--poses", o->csv_alias, csv);
+  c->add_option("--calibrate", o->calibrate,
+                "calibrate at a moment of the input: npose@SECONDS or tpose@SECONDS")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            mocap::CalibrationPose pose;
+            double at_s = 0;
+            return parse_calibrate(v, pose, at_s)
+                       ? std::string()
+                       : "needs npose@SECONDS or tpose@SECONDS, got '" + v + "'";
+          },
+          "POSE@SECONDS"));
+  c->add_option("--source", o->source,
+                "session files: replay 'raw' device bytes or recorded 'samples' (default: "
+                "samples if recorded)")
+      ->check(CLI::IsMember({"raw", "samples"}));
+  c->add_flag("--quiet", o->quiet, "no progress bar");
+  c->callback([o, &exit_code] { exit_code = run_replay(*o); });
 }
 
 }  // namespace mocap::cmd
