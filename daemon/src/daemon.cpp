@@ -1,6 +1,7 @@
 // Daemon assembly: devices feed the pipeline, the pipeline feeds the outputs, the control
 // socket drives commands and reports status as JSON.
 #include "mocap/daemon/daemon.hpp"
+#include "mocap/daemon/outputs.hpp"
 
 #include <poll.h>
 
@@ -211,7 +212,11 @@ std::string Daemon::status_json() const {
   const PipelineStatus st = pipeline_->status();
   nlohmann::json j;
   j["ok"] = true;
-  j["uptime_s"] = ns_to_s(monotonic_ns() - started_ns_);
+  // Numbers rounded to what they mean (ms, 0.1 s): never 0.30000000000000004.
+  const auto round_to = [](double v, double per_unit) {
+    return std::round(v * per_unit) / per_unit;  // the nearest double to the decimal
+  };
+  j["uptime_s"] = round_to(ns_to_s(monotonic_ns() - started_ns_), 1000);
   j["frame"] = st.frame.frame;
   j["samples"] = st.samples;
   j["rejected_samples"] = st.rejected;
@@ -219,7 +224,7 @@ std::string Daemon::status_json() const {
   j["rate_hz"] = cfg_.pipeline.rate_hz;
   j["calibrated"] = (st.frame.flags & kFrameCalibrated) != 0;
   j["calibrating"] = (st.frame.flags & kFrameCalibrating) != 0;
-  j["calib_countdown_s"] = st.frame.calib_countdown_s;
+  j["calib_countdown_s"] = round_to(st.frame.calib_countdown_s, 10);
   j["demo"] = (st.frame.flags & kFrameDemo) != 0;
   {
     const CalibrationProgress& c = st.calibration;
@@ -230,6 +235,20 @@ std::string Daemon::status_json() const {
   {
     std::lock_guard lock(rec_mu_);
     j["recording"] = recording_path_;
+  }
+  {
+    // Where to reach this daemon: the streams (a port 0 JSON stream: the port it picked) and
+    // the control socket.
+    const OutputsConfig& o = cfg_.outputs;
+    nlohmann::json streams;
+    streams["json"] = {{"enabled", o.json.enabled},
+                       {"bind", o.json.bind},
+                       {"port", o.json.enabled ? json_stream_port(parts_.sinks) : o.json.port}};
+    streams["vmc"] = {{"enabled", o.vmc.enabled}, {"host", o.vmc.host}, {"port", o.vmc.port}};
+    streams["vrchat"] = {
+        {"enabled", o.vrchat.enabled}, {"host", o.vrchat.host}, {"port", o.vrchat.port}};
+    streams["control_socket"] = control_path_;
+    j["streams"] = streams;
   }
   nlohmann::json sensors = nlohmann::json::array();
   for (uint32_t i = 0; i < st.frame.sensor_count && i < static_cast<uint32_t>(kMaxSensors); ++i) {

@@ -2,64 +2,20 @@
 // program and every subcommand (found by reading the programs' own help, so a new subcommand is
 // covered without touching this file) exit 0 with output; conflicting options exit 2 and name
 // both options; a usage error names the program and the problem.
-#include <fcntl.h>
 #include <gtest/gtest.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
-extern char** environ;
-namespace fs = std::filesystem;
+#include "../common/run_program.hpp"
 
 namespace {
 
+using mocap::test::Result;
+using mocap::test::run;
+
 const std::string kBin = std::string(MOCAP_BINARY_DIR) + "/bin/";
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-/// Runs argv to completion with stdout and stderr captured (each program only parses here).
-Result run(std::vector<std::string> argv) {
-  const std::string base =
-      (fs::temp_directory_path() / ("mocap-cli-" + std::to_string(getpid()))).string();
-  std::vector<char*> a;
-  for (auto& s : argv)
-    a.push_back(s.data());
-  a.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, (base + ".out").c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                   0644);
-  posix_spawn_file_actions_addopen(&fa, 2, (base + ".err").c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                   0644);
-  pid_t pid = -1;
-  Result r;
-  if (posix_spawn(&pid, a[0], &fa, nullptr, a.data(), environ) != 0) return r;
-  posix_spawn_file_actions_destroy(&fa);
-  int st = 0;
-  waitpid(pid, &st, 0);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-  r.out = slurp(base + ".out");
-  r.err = slurp(base + ".err");
-  fs::remove(base + ".out");
-  fs::remove(base + ".err");
-  return r;
-}
 
 /// The subcommand names listed in a help text's "Subcommands:" section.
 std::vector<std::string> subcommands_in(const std::string& help) {

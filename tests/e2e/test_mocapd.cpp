@@ -21,6 +21,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -177,6 +178,18 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "status"}, &out), 0);
   EXPECT_NE(out.find("foot_r"), std::string::npos) << out;
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "calibrate", "apose"}), 2);
+  // No pose named: the configured calibration.pose (npose by default).
+  EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "calibrate"}, &out), 0);
+  EXPECT_NE(out.find("calibration (npose)"), std::string::npos) << out;
+  // status --json: where the streams and the control socket are, numbers at their precision.
+  EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "status", "--json"}, &out), 0);
+  const auto js = nlohmann::json::parse(out);
+  EXPECT_EQ(js["streams"]["json"]["port"], port);
+  EXPECT_TRUE(js["streams"]["json"]["enabled"].get<bool>());
+  EXPECT_EQ(js["streams"]["vmc"]["port"], 39539);
+  EXPECT_EQ(js["streams"]["vrchat"]["port"], 9000);
+  EXPECT_EQ(js["streams"]["control_socket"], sock);
+  EXPECT_FALSE(std::regex_search(out, std::regex("[0-9]\\.[0-9]{7,}"))) << out;
   auto bad = nlohmann::json::parse(mocap::daemon::control_call(sock, std::string(9000, 'z')));
   EXPECT_FALSE(bad["ok"].get<bool>());
 

@@ -5,6 +5,7 @@
 // a torn tail is reported; everything intact is exported.
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -22,6 +23,7 @@
 #include "mocap/skeleton/gltf.hpp"
 #include "mocap/skeleton/interpolation.hpp"
 #include "mocap/skeleton/opensim.hpp"
+#include "run_summary.hpp"
 
 namespace mocap::cmd {
 namespace {
@@ -117,6 +119,8 @@ class FinishedPoses {
     PoseFrame f;
     const auto drain = [&] {
       while (bridge_.next(f)) {
+        if (t_first_ns_ < 0) t_first_ns_ = f.t_ns;
+        t_last_ns_ = f.t_ns;
         if (!resampler_) {
           emit(f);
           continue;
@@ -136,10 +140,15 @@ class FinishedPoses {
     drain();
   }
   long bridged() const { return bridge_.bridged(); }
+  /// Time from the first to the last pose of the session, seconds.
+  double duration_s() const {
+    return t_last_ns_ > t_first_ns_ ? (t_last_ns_ - t_first_ns_) * 1e-9 : 0;
+  }
 
  private:
   DropoutBridge bridge_;
   std::optional<PoseResampler> resampler_;
+  int64_t t_first_ns_ = -1, t_last_ns_ = -1;
 };
 
 bool write_csv_row(std::FILE* f, double t, int s, const PoseFrame& p) {
@@ -211,10 +220,11 @@ int export_poses(SessionReader& r, const std::string& in, const std::string& out
     std::fprintf(stderr, "mocap export: %s holds no poses\n", in.c_str());
     return 1;
   }
-  std::fprintf(stderr, "mocap export: %ld frames", frames);
-  if (rate_hz > 0) std::fprintf(stderr, " at %.6g Hz", rate_hz);
-  std::fprintf(stderr, " (body height %.2f m; %ld segment-frames bridged across dropouts) -> %s\n",
-               body.dimensions().height_m, poses.bridged(), out.c_str());
+  nlohmann::json extra = {{"body_height_m", std::round(body.dimensions().height_m * 100) / 100},
+                          {"bridged_segment_frames", poses.bridged()},
+                          {"damaged_ranges", r.damaged().size()}};
+  if (rate_hz > 0) extra["rate_hz"] = rate_hz;
+  print_run_summary("export", in, {out}, frames, poses.duration_s(), extra);
   return damaged ? kExitDamaged : 0;
 }
 

@@ -4,6 +4,7 @@
 //                [--calibrate npose@SECONDS|tpose@SECONDS] [--source raw|samples]
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -19,6 +20,7 @@
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
 #include "mocap/skeleton/dropout_bridge.hpp"
+#include "run_summary.hpp"
 
 namespace mocap::cmd {
 
@@ -158,12 +160,23 @@ int run_replay(const ReplayCommandOptions& o) {
     if (bvh) bvh->close();
     if (poses) poses->close();
     const double wall_s = (monotonic_ns() - wall0) * 1e-9;
-    std::printf(
-        "{\"input\":\"%s\",\"sensors\":%zu,\"samples\":%llu,\"frames\":%llu,"
-        "\"duration_s\":%.3f,\"wall_s\":%.3f,\"calibration\":\"%s\"}\n",
-        input.c_str(), cfg.sensors.size(), static_cast<unsigned long long>(r.samples),
-        static_cast<unsigned long long>(r.frames), (r.t_last_ns - r.t_first_ns) * 1e-9, wall_s,
-        engine.last_calibration_message().c_str());
+    const bool calibrated = engine.skeleton().calibration().valid;
+    std::vector<std::string> outputs;
+    if (!o.bvh.empty()) outputs.push_back(o.bvh);
+    if (!csv_path.empty()) outputs.push_back(csv_path);
+    print_run_summary("replay", input, outputs, static_cast<long long>(r.frames),
+                      (r.t_last_ns - r.t_first_ns) * 1e-9,
+                      {{"sensors", cfg.sensors.size()},
+                       {"samples", r.samples},
+                       {"wall_s", std::round(wall_s * 1000) / 1000},
+                       {"calibrated", calibrated},
+                       {"calibration", engine.last_calibration_message()}});
+    if (!calibrated && !opt.calibrate_pose)
+      std::fprintf(stderr,
+                   "mocap replay: warning: %s holds no calibration and none was asked for: the "
+                   "poses are the sensors' own orientations, not the body's (calibrate with "
+                   "--calibrate npose@SECONDS at a moment the person stands in the pose)\n",
+                   input.c_str());
     if (opt.calibrate_pose && !engine.skeleton().calibration().valid) {
       std::fprintf(stderr, "mocap replay: calibration at %.2f s failed: %s\n", opt.calibrate_at_s,
                    engine.last_calibration_message().empty()
