@@ -258,8 +258,9 @@ std::string Daemon::status_json() const {
     e["name"] = std::string(s.name, strnlen(s.name, sizeof s.name));
     e["segment"] = s.segment >= 0 ? std::string(kSegmentNames[s.segment]) : std::string();
     e["state"] = kStates[std::min<int>(s.state, 4)];
-    e["rate_hz"] = std::round(s.rate_hz * 10) / 10;
-    e["age_ms"] = std::round(s.last_age_ms * 10) / 10;
+    // The status fields are floats: rounded as doubles, so 2.8 prints as 2.8.
+    e["rate_hz"] = round_to(s.rate_hz, 10);
+    e["age_ms"] = round_to(s.last_age_ms, 10);
     e["drops"] = s.drops;
     e["errors"] = s.errors;
     if (i < devices_.size()) {  // device i carries sensor i (one sensor per configured device)
@@ -274,8 +275,8 @@ std::string Daemon::status_json() const {
     e["mag_disturbed"] = f.mag_disturbed;
     e["mag_no_reference"] = f.mag_no_reference;
     e["calibrated"] = f.calibrated;
-    e["gyro_bias_dps"] = std::round(s.gyro_bias_dps * 1000) / 1000;
-    e["heading_sigma_deg"] = std::round(s.heading_sigma_deg * 10) / 10;
+    e["gyro_bias_dps"] = round_to(s.gyro_bias_dps, 1000);
+    e["heading_sigma_deg"] = round_to(s.heading_sigma_deg, 10);
     sensors.push_back(e);
   }
   j["sensors"] = sensors;

@@ -83,7 +83,8 @@ void declare_options(CLI::App& app, ViewerOptions& o, Flags& f) {
           "WxH"));
   CLI::Option* shot = app.add_option(
       "--screenshot", o.screenshot,
-      "render offscreen (needs an X display, e.g. xvfb-run) and write this PNG, then exit");
+      "render offscreen and write this PNG, then exit (no display needed: without X, EGL "
+      "on Mesa's surfaceless platform)");
   app.add_option("--frames", o.frames, "frames to render before the screenshot")
       ->check(CLI::Range(1, 1000000));
   app.add_option("--wait", o.wait_s, "screenshot: seconds to wait for a live source's first pose")
