@@ -1,6 +1,7 @@
 // Command-line conventions shared by the programs (mocap/core/cli.hpp), on CLI11.
 #include "mocap/core/cli.hpp"
 
+#include <cctype>
 #include <cstdio>
 
 #include "mocap/core/version.hpp"
@@ -19,6 +20,39 @@ std::string command_path(const CLI::App& app) {
     name += " " + cur->get_name();
   }
   return name;
+}
+
+/// The deepest subcommand being parsed (the app itself when none).
+const CLI::App* deepest(const CLI::App& app) {
+  const CLI::App* cur = &app;
+  while (true) {
+    const auto subs = cur->get_subcommands();
+    if (subs.empty()) return cur;
+    cur = subs.front();
+  }
+}
+
+/// For a conflict or a missing companion option: each option the message names, with its
+/// description (which says what it is for, and so why it does not go with the other).
+std::string explain_options(const CLI::App& app, const std::string& message) {
+  std::string out;
+  std::size_t at = 0;
+  while ((at = message.find("--", at)) != std::string::npos) {
+    std::size_t end = at + 2;
+    while (end < message.size() &&
+           (std::isalnum(static_cast<unsigned char>(message[end])) || message[end] == '-'))
+      ++end;
+    const std::string name = message.substr(at, end - at);
+    at = end;
+    for (const CLI::App* a = deepest(app); a; a = a->get_parent()) {
+      const CLI::Option* o = a->get_option_no_throw(name);
+      if (!o) continue;
+      if (out.find("  " + name + ":") == std::string::npos)
+        out += "  " + name + ": " + o->get_description() + "\n";
+      break;
+    }
+  }
+  return out;
 }
 
 /// The command's own name (last word of the path) for its version line.
@@ -59,10 +93,12 @@ CLI::Option* add_multi(CLI::App& app, const std::string& name, std::vector<std::
 CLI::Option* add_deprecated_alias(CLI::App& app, const std::string& name, std::string& value,
                                   CLI::Option* canonical) {
   const std::string instead = canonical->get_name();
-  CLI::Option* o =
-      app.add_option(name, value)->group("")->each([name, instead](const std::string&) {
-        std::fprintf(stderr, "warning: %s is deprecated; use %s\n", name.c_str(), instead.c_str());
-      });
+  CLI::Option* o = app.add_option(name, value, "deprecated spelling of " + instead)
+                       ->group("")
+                       ->each([name, instead](const std::string&) {
+                         std::fprintf(stderr, "warning: %s is deprecated; use %s\n", name.c_str(),
+                                      instead.c_str());
+                       });
   o->excludes(canonical);
   return o;
 }
@@ -74,8 +110,10 @@ std::optional<int> parse(CLI::App& app, int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     const std::string who = command_path(app);
-    std::fprintf(stderr, "%s: %s\nRun '%s --help' for the options.\n", who.c_str(), e.what(),
-                 who.c_str());
+    const bool conflict = dynamic_cast<const CLI::ExcludesError*>(&e) != nullptr ||
+                          dynamic_cast<const CLI::RequiresError*>(&e) != nullptr;
+    std::fprintf(stderr, "%s: %s\n%sRun '%s --help' for the options.\n", who.c_str(), e.what(),
+                 conflict ? explain_options(app, e.what()).c_str() : "", who.c_str());
     return 2;
   }
   return std::nullopt;

@@ -38,18 +38,24 @@ void declare_options(CLI::App& app, Options& o) {
       "  mocapd --replay SESSION [--speed 0|1|X] [--config FILE]");
   CLI::Option* config = app.add_option("--config", o.config, "rig configuration (TOML)");
   CLI::Option* check =
-      app.add_option("--check-config", o.check_config, "validate a configuration file and exit");
+      app.add_option("--check-config", o.check_config,
+                     "validate a configuration file and exit (runs nothing: not with --config, "
+                     "--demo, --replay or --print-config)");
   CLI::Option* print =
       app.add_flag("--print-config", o.print_config,
                    "print the effective configuration (defaults included) and exit");
   cli::add_multi(app, "--set", o.sets,
                  "override a configuration key, e.g. --set outputs.json.port=7400");
   CLI::Option* demo = app.add_flag(
-      "--demo", o.demo, "run the virtual performer's simulated sensors (config/demo.toml rig)");
+      "--demo", o.demo,
+      "run the virtual performer's simulated sensors (config/demo.toml rig; live, so not "
+      "with --replay)");
   CLI::Option* replay =
-      app.add_option("--replay", o.replay, "play a recorded session through the pipeline and exit");
+      app.add_option("--replay", o.replay,
+                     "play a recorded session through the pipeline instead of live sensors, "
+                     "and exit");
   app.add_option("--speed", o.speed,
-                 "replay speed: 1 = real time, 0 = as fast as possible, X = factor")
+                 "replay speed (of --replay): 1 = real time, 0 = as fast as possible, X = factor")
       ->check(CLI::NonNegativeNumber)
       ->needs(replay);
   app.add_option("--log-level", o.log_level, "daemon log level (overrides daemon.log_level)");

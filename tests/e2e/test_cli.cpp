@@ -130,6 +130,11 @@ TEST(Cli, ConflictingOptionsSayWhich) {
     EXPECT_NE(r.err.find(c.b), std::string::npos) << joined(c.argv) << "\n" << r.err;
     EXPECT_NE(r.err.find("excludes"), std::string::npos) << r.err;
   }
+  // Why: each conflicting option is shown with its description.
+  const Result why = run(cases[0].argv);
+  EXPECT_NE(why.err.find("--check-config: validate a configuration file and exit (runs nothing"),
+            std::string::npos)
+      << why.err;
   // A value that needs another option says which.
   const Result speed = run({kBin + "mocapd", "--speed", "2"});
   EXPECT_EQ(speed.code, 2);

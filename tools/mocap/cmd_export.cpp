@@ -241,11 +241,13 @@ void add_export(CLI::App& app, int& exit_code) {
   c->footer(kExportUsage);
   c->add_option("SESSION", o->input, "the recorded session (.mcap)")->required();
   CLI::Option* outs[] = {
-      c->add_option("--csv", o->csv, "write the poses as CSV to this file"),
-      c->add_option("--bvh", o->bvh, "write the poses as BVH to this file"),
-      c->add_option("--gltf", o->gltf, "write the poses as binary glTF (.glb) to this file"),
-      c->add_option("--opensim", o->opensim,
-                    "write an OpenSense orientations table (.sto) to this file")};
+      c->add_option("--csv", o->csv, "write the poses as CSV to this file (one output per run)"),
+      c->add_option("--bvh", o->bvh, "write the poses as BVH to this file (one output per run)"),
+      c->add_option("--gltf", o->gltf,
+                    "write the poses as binary glTF (.glb) to this file (one output per run)"),
+      c->add_option(
+          "--opensim", o->opensim,
+          "write an OpenSense orientations table (.sto) to this file (one output per run)")};
   // One output per run: each writer reads the session once.
   for (CLI::Option* a : outs)
     for (CLI::Option* b : outs)

@@ -121,7 +121,7 @@ void add_perform(CLI::App& app, int& exit_code) {
   CLI::Option* truth = c->add_option(
       "--truth", o->truth, "write the ground-truth poses here (t,segment,w,x,y,z,px,py,pz)");
   CLI::Option* bvh = c->add_option("--bvh", o->bvh, "write the ground truth here as BVH");
-  c->add_option("--bvh-rate", o->bvh_rate_hz, "BVH frame rate, Hz")
+  c->add_option("--bvh-rate", o->bvh_rate_hz, "frame rate of the --bvh file, Hz")
       ->check(CLI::Range(1.0, 1000.0))
       ->needs(bvh);
   c->callback([o, &exit_code, samples, truth, bvh] {

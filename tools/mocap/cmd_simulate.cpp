@@ -131,15 +131,18 @@ void add_simulate(CLI::App& app, int& exit_code) {
   c->footer(kSimulateUsage);
   c->add_option("--protocol", o->sim.protocol, "witmotion|xbus|ds4|dualsense|joycon|line")
       ->required();
-  CLI::Option* pty = c->add_flag("--pty", o->pty, "emit on a new pseudo-terminal");
-  c->add_option("--link", o->sim.pty_link, "with --pty: also make a stable symlink at PATH")
+  CLI::Option* pty = c->add_flag(
+      "--pty", o->pty, "emit on a new pseudo-terminal (one destination: --pty, --udp or --out)");
+  c->add_option("--link", o->sim.pty_link, "also make a stable symlink at PATH to the --pty")
       ->needs(pty);
-  CLI::Option* udp = c->add_option("--udp", o->sim.udp, "send datagrams to HOST:PORT");
-  CLI::Option* out = c->add_option("--out", o->out, "write a capture file");
+  CLI::Option* udp = c->add_option(
+      "--udp", o->sim.udp, "send datagrams to HOST:PORT (one destination: --pty, --udp or --out)");
+  CLI::Option* out = c->add_option("--out", o->out,
+                                   "write a capture file (one destination: --pty, --udp or --out)");
   // One destination: the bytes go to a pty, to UDP or into a file.
   pty->excludes(udp)->excludes(out);
   udp->excludes(out);
-  c->add_option("--samples", o->samples, "number of samples written by --out")
+  c->add_option("--samples", o->samples, "number of samples written to the --out file")
       ->check(CLI::PositiveNumber)
       ->needs(out);
   c->add_option("--motion", o->sim.motion, "static|rotate|FILE.csv");

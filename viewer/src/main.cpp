@@ -65,9 +65,12 @@ void declare_options(CLI::App& app, ViewerOptions& o, Flags& f) {
                      "shm (the local daemon's shared posture) or synthetic (a virtual performer)")
           ->check(CLI::IsMember({"shm", "synthetic"}));
   app.add_option("--shm", o.shm_name, "shared posture name (default /mocap-posture-<uid>)");
-  CLI::Option* connect =
-      app.add_option("--connect", o.connect, "HOST:PORT of a remote daemon's JSON stream");
-  CLI::Option* play = app.add_option("--play", o.play, "SESSION or BVH file to play back");
+  CLI::Option* connect = app.add_option(
+      "--connect", o.connect,
+      "HOST:PORT of a remote daemon's JSON stream (one source: not with --play or --source)");
+  CLI::Option* play = app.add_option(
+      "--play", o.play,
+      "SESSION or BVH file to play back (one source: not with --connect or --source)");
   connect->excludes(source)->excludes(play);
   play->excludes(source);
   app.add_option("--avatars", o.avatars, "number of avatars for the synthetic source (crowd)")
@@ -94,7 +97,9 @@ void declare_options(CLI::App& app, ViewerOptions& o, Flags& f) {
   CLI::Option* socket = app.add_option(
       "--socket", o.control_socket, "daemon control socket (default $XDG_RUNTIME_DIR/mocapd.sock)");
   cli::add_deprecated_alias(app, "--control", f.control_alias, socket);
-  app.add_flag("--bench", o.bench, "measure frame rates (1 and 150 avatars) and print JSON")
+  app.add_flag("--bench", o.bench,
+               "measure frame rates (1 and 150 avatars) in a window and print JSON (not with "
+               "--screenshot)")
       ->excludes(shot);
   app.add_flag("--no-vsync", f.no_vsync, "do not wait for the display's refresh");
   app.add_flag("--stick", f.stick, "stick figure instead of solid capsules");
