@@ -4,6 +4,7 @@
 // both options; a usage error names the program and the problem.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -152,4 +153,17 @@ TEST(Cli, UsageErrorsNameTheCommandAndTheProblem) {
   const Result none = run({kBin + "mocap"});
   EXPECT_EQ(none.code, 2);
   EXPECT_NE(none.err.find("subcommand is required"), std::string::npos) << none.err;
+}
+
+TEST(Cli, DeprecatedSpellingsStillWorkAndWarn) {
+  const std::string csv = "/tmp/mocap-cli-poses-" + std::to_string(getpid()) + ".csv";
+  const Result r = run({kBin + "mocap", "replay",
+                        std::string(MOCAP_SOURCE_DIR) + "/tests/data/demo_direct_50hz.mcap",
+                        "--poses", csv, "--quiet"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("mocap replay: warning: --poses is deprecated; use --csv"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.out.find(csv), std::string::npos) << r.out;  // written where --poses said
+  std::remove(csv.c_str());
 }
