@@ -90,20 +90,20 @@ CLI::Option* add_multi(CLI::App& app, const std::string& name, std::vector<std::
   return o;
 }
 
-CLI::Option* add_deprecated_alias(CLI::App& app, const std::string& name, std::string& value,
-                                  CLI::Option* canonical) {
-  const std::string instead = canonical->get_name();
+CLI::Option* deprecate_alias(CLI::App& app, CLI::Option* alias, CLI::Option* canonical) {
+  const std::string name = alias->get_name(), instead = canonical->get_name();
   std::string who = app.get_name();  // "mocap replay"
   for (const CLI::App* p = app.get_parent(); p; p = p->get_parent())
     who = p->get_name() + " " + who;
-  CLI::Option* o = app.add_option(name, value, "deprecated spelling of " + instead)
-                       ->group("")
-                       ->each([who, name, instead](const std::string&) {
-                         std::fprintf(stderr, "%s: warning: %s is deprecated; use %s\n",
-                                      who.c_str(), name.c_str(), instead.c_str());
-                       });
-  o->excludes(canonical);
-  return o;
+  alias->description("deprecated spelling of " + instead)
+      ->group("")
+      ->each([who, name, instead](const std::string&) {
+        std::fprintf(stderr, "%s: warning: %s is deprecated; use %s\n", who.c_str(), name.c_str(),
+                     instead.c_str());
+      })
+      ->excludes(canonical);
+  alias->default_str("");
+  return alias;
 }
 
 std::optional<int> parse(CLI::App& app, int argc, char** argv) {

@@ -181,7 +181,7 @@ TEST(SessionExport, BvhReadsBackThroughTheSkeletonsReaderWithTheRecordedBody) {
 }
 
 // Export finishes the poses for animation tools: a sensor's 200 ms dropout (its segment held by
-// the live pipeline, the sample age growing) comes out slerped across the gap, and --rate
+// the live pipeline, the sample age growing) comes out slerped across the gap, and --frame-rate
 // resamples to one fixed frame time.
 TEST(SessionExport, BridgesDropoutsAndResamples) {
   TempDir dir;
@@ -222,7 +222,8 @@ TEST(SessionExport, BridgesDropoutsAndResamples) {
   EXPECT_GT(std::abs(make_pose(19).q_earth_segment[kNeck][2] - expect[2]), 0.01);
 
   // 60 frames over 590 ms at 50 Hz: 30 frames, 20 ms apart.
-  ASSERT_EQ(run(ses + " --bvh " + dir.file("d.bvh") + " --rate 50", err), 0) << read_text(err);
+  ASSERT_EQ(run(ses + " --bvh " + dir.file("d.bvh") + " --frame-rate 50", err), 0)
+      << read_text(err);
   const BvhClip clip = parse_bvh(read_text(dir.file("d.bvh")), "d.bvh");
   EXPECT_EQ(clip.frame_count, 30);
   EXPECT_NEAR(clip.frame_time_s, 0.020, 1e-9);

@@ -35,8 +35,8 @@ constexpr const char* kExportUsage =
     "named like the BVH bones, a skin, one animation (rotations, root translation), metres.\n"
     "OpenSim: an OpenSense orientations table (pelvis_imu, femur_r_imu, ...: w,x,y,z in\n"
     "OpenSim's y-up ground frame). BVH, glTF and OpenSim are resampled to one fixed frame time\n"
-    "(the recorded pipeline rate or --rate). A sensor's dropout of up to 0.5 s is bridged (its\n"
-    "segment slerped across the gap).\n"
+    "(the recorded pipeline rate or --frame-rate). A sensor's dropout of up to 0.5 s is\n"
+    "bridged (its segment slerped across the gap).\n"
     "A damaged session is read around the damage: every intact block is exported and each\n"
     "damaged range is reported (bytes, time span).\n"
     "Exit status: 0 exported (a torn tail after a crash is reported, not an error); 1 error;\n"
@@ -252,11 +252,14 @@ void add_export(CLI::App& app, int& exit_code) {
   for (CLI::Option* a : outs)
     for (CLI::Option* b : outs)
       if (a != b) a->excludes(b);
-  c->add_option("--rate", o->rate_hz,
-                "resample to this frame rate, Hz (default: CSV as recorded, the others at the "
-                "recorded pipeline rate)")
-      ->check(CLI::Range(1e-9, 10000.0))
-      ->default_str("");
+  CLI::Option* rate =
+      c->add_option("--frame-rate", o->rate_hz,
+                    "resample to this frame rate, Hz (default: CSV as recorded, the others at the "
+                    "recorded pipeline rate)")
+          ->check(CLI::Range(1e-9, 10000.0))
+          ->default_str("");
+  // --rate means a sensor's sample rate elsewhere (perform, simulate, bench).
+  cli::add_deprecated_alias(*c, "--rate", o->rate_hz, rate)->check(CLI::Range(1e-9, 10000.0));
   c->callback([o, &exit_code] {
     if (o->csv.empty() && o->bvh.empty() && o->gltf.empty() && o->opensim.empty()) {
       std::fprintf(stderr, "mocap export: give one output: --csv, --bvh, --gltf or --opensim\n");

@@ -25,10 +25,16 @@ CLI::App* add_command(CLI::App& parent, const std::string& name, const std::stri
 CLI::Option* add_multi(CLI::App& app, const std::string& name, std::vector<std::string>& values,
                        const std::string& description);
 
-/// A deprecated spelling of `canonical`: hidden from help, warns when used, stores into the same
-/// variable. Returns the hidden option.
-CLI::Option* add_deprecated_alias(CLI::App& app, const std::string& name, std::string& value,
-                                  CLI::Option* canonical);
+/// Makes `alias` a deprecated spelling of `canonical`: hidden from help, warns when used, not
+/// with `canonical`. Returns `alias`.
+CLI::Option* deprecate_alias(CLI::App& app, CLI::Option* alias, CLI::Option* canonical);
+
+/// A deprecated spelling of `canonical` storing into `value` (usually canonical's own variable).
+template <typename T>
+CLI::Option* add_deprecated_alias(CLI::App& app, const std::string& name, T& value,
+                                  CLI::Option* canonical) {
+  return deprecate_alias(app, app.add_option(name, value), canonical);
+}
 
 /// Parses argv. Returns nullopt when the program should run, or the exit code when it is done:
 /// 0 after printing help or the version (stdout), 2 after a usage error (stderr: "PROGRAM
