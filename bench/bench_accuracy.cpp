@@ -7,13 +7,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "bench.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/sim/accuracy.hpp"
 #include "mocap/sim/motion.hpp"
 
@@ -148,98 +149,54 @@ void print_markdown_row(const sim::AccuracyResult& r) {
                r.hinge_max_rmse_deg, r.three_dof_max_rmse_deg, drift);
 }
 
-/// An on|off option (absent: the default already in `out`); false after printing an error.
-bool on_off(const CliArgs& args, const char* name, bool& out) {
-  if (!args.has(name)) return true;
-  const std::string v = args.get_or(name, "");
-  if (v != "on" && v != "off") {
-    std::fprintf(stderr, "mocap bench accuracy: --%s must be on or off\n", name);
-    return false;
-  }
-  out = v == "on";
-  return true;
-}
+/// mocap bench accuracy's command line (declared in add_accuracy).
+struct AccuracyCommandOptions {
+  std::string motion = "all", disturbance = "none,both", heading = "normals", mag = "on", clips,
+              seeds, filter_param, sensor_errors;
+  long seed = 1;
+  double rate_hz = 100, frame_rate_hz = 0;
+  bool calibration_moves = false, gyro_scale_calibration = false, warmup = false, ideal = false,
+       markdown = false;
+};
 
-}  // namespace
-
-int run_accuracy(int argc, char** argv) {
-  CliArgs args;
-  args.option("motion", "motion name, comma list or 'all' (default all)")
-      .option("disturbance",
-              "none|magnet|desk|both|arm_magnet, comma list or 'all' (default none,both)")
-      .option("seed", "random seed (default 1)")
-      .option("rate", "sensor rate in Hz (default 100)")
-      .option(
-          "heading",
-          "calibration heading source: normals|pelvis|mean|truth (default normals, as the daemon)")
-      .flag(
-          "calibration-moves",
-          "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each motion")
-      .flag("gyro-scale-calibration",
-            "calibrate each sensor's gyro scale first (table spins, as a user does once per "
-            "sensor) and divide it out")
-      .flag("warmup",
-            "the sensors run for 22 s of walking and turning before the calibration stand")
-      .option("mag", "with magnetometers (9D): on|off (default on; off: 6D)")
-      .option("frame-rate", "pose frames per second (default: one per sample time)")
-      .option("clips", "every .bvh file in this folder as a motion (calibration procedure first)")
-      .option("seeds", "comma list of seeds (default: --seed)")
-      .option("filter-param", "AttitudeFilter overrides, comma list of name=value")
-      .option("sensor-errors",
-              "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
-              "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)")
-      .flag("ideal", "ideal sensors (no noise, bias, misalignment): isolates the pipeline")
-      .flag("markdown", "also print a markdown table on stderr");
-  if (!args.parse(argc, argv, 1)) {
-    std::fprintf(stderr, "mocap bench accuracy: %s\noptions:\n%s", args.error().c_str(),
-                 args.help().c_str());
-    return 2;
-  }
+int run_accuracy(const AccuracyCommandOptions& args) {
   std::vector<std::string> all_motions;
   for (auto n : sim::motion_names())
     if (n != "npose") all_motions.emplace_back(n);
   sim::AccuracyOptions base;
-  long seed = 1;
-  if (!args.get_int("seed", seed) || !args.get_double("rate", base.rate_hz)) {
-    std::fprintf(stderr, "mocap bench accuracy: %s\n", args.error().c_str());
-    return 2;
-  }
+  const long seed = args.seed;
+  base.rate_hz = args.rate_hz;
   base.seed = static_cast<uint64_t>(seed);
-  const std::string heading = args.get_or("heading", "normals");
+  const std::string& heading = args.heading;
   if (heading == "normals")
     base.heading = HeadingSource::mount_normals;
   else if (heading == "pelvis")
     base.heading = HeadingSource::pelvis_sensor;
   else if (heading == "mean")
     base.heading = HeadingSource::mean_sensors;
-  else if (heading == "truth")
-    base.heading = HeadingSource::explicit_heading;
-  else {
-    std::fprintf(stderr,
-                 "mocap bench accuracy: --heading must be normals, pelvis, mean or truth\n");
-    return 2;
-  }
-  if (args.has("gyro-scale-calibration")) base.gyro_scale_calibration = true;
-  if (args.has("filter-param")) base.filter_params = expand(args.get_or("filter-param", ""), {});
-  base.calibration_moves = args.has("calibration-moves");
-  if (!on_off(args, "mag", base.use_mag)) return 2;
-  if (!args.get_double("frame-rate", base.frame_rate_hz)) return 2;
+  else
+    base.heading = HeadingSource::explicit_heading;  // truth
+  if (args.gyro_scale_calibration) base.gyro_scale_calibration = true;
+  if (!args.filter_param.empty()) base.filter_params = expand(args.filter_param, {});
+  base.calibration_moves = args.calibration_moves;
+  base.use_mag = args.mag == "on";
+  base.frame_rate_hz = args.frame_rate_hz;
 
-  base.warmup = args.has("warmup");
-  if (args.has("ideal")) base.sensor = sim::SensorModelParams::ideal();
-  if (args.has("sensor-errors")) {
+  base.warmup = args.warmup;
+  if (args.ideal) base.sensor = sim::SensorModelParams::ideal();
+  if (!args.sensor_errors.empty()) {
     std::string bad;
-    base.sensor = only_errors(args.get_or("sensor-errors", ""), bad);
+    base.sensor = only_errors(args.sensor_errors, bad);
     if (!bad.empty()) {
       std::fprintf(stderr, "mocap bench accuracy: unknown sensor error group '%s'\n", bad.c_str());
       return 2;
     }
   }
-  auto motions = expand(args.get_or("motion", "all"), all_motions);
-  if (args.has("clips")) {
+  auto motions = expand(args.motion, all_motions);
+  if (!args.clips.empty()) {
     motions.clear();
     std::vector<std::string> files;
-    for (const auto& e : std::filesystem::directory_iterator(args.get_or("clips", ".")))
+    for (const auto& e : std::filesystem::directory_iterator(args.clips))
       if (e.path().extension() == ".bvh") files.push_back(e.path().string());
     std::sort(files.begin(), files.end());
     for (const auto& f : files)
@@ -247,20 +204,20 @@ int run_accuracy(int argc, char** argv) {
     base.calibration_moves = true;
   }
   std::vector<uint64_t> seeds;
-  for (const std::string& v : expand(args.get_or("seeds", std::to_string(seed)), {}))
+  for (const std::string& v : expand(args.seeds.empty() ? std::to_string(seed) : args.seeds, {}))
     seeds.push_back(std::strtoull(v.c_str(), nullptr, 10));
-  const auto disturbances = expand(args.get_or("disturbance", "none,both"),
-                                   {"none", "magnet", "desk", "both", "arm_magnet"});
+  const auto disturbances =
+      expand(args.disturbance, {"none", "magnet", "desk", "both", "arm_magnet"});
 
   nlohmann::json out;
   out["bench"] = "accuracy";
   out["seed"] = seed;
   out["rate_hz"] = base.rate_hz;
-  out["sensor_model"] = args.has("ideal") ? "ideal" : "consumer_mems_default";
+  out["sensor_model"] = args.ideal ? "ideal" : "consumer_mems_default";
   out["targets"] = {{"hinge_rmse_deg", kHingeTargetDeg},
                     {"three_dof_rmse_deg", kThreeDofTargetDeg},
                     {"root_drift_fraction", kRootDriftTarget}};
-  if (args.has("markdown")) {
+  if (args.markdown) {
     std::fprintf(stderr,
                  "| motion | disturbance | tracker (deg) | filters alone (deg) | worst segment "
                  "excess (deg) | elbow/knee max RMSE (deg) | 3-DOF max RMSE (deg) | root drift |\n"
@@ -279,7 +236,7 @@ int run_accuracy(int argc, char** argv) {
           nlohmann::json jr = to_json(r);
           jr["seed"] = sd;
           out["results"].push_back(jr);
-          if (args.has("markdown")) print_markdown_row(r);
+          if (args.markdown) print_markdown_row(r);
           all_ok = all_ok && r.calibrated;
         }
     }
@@ -289,6 +246,46 @@ int run_accuracy(int argc, char** argv) {
   }
   std::printf("%s\n", out.dump(2).c_str());
   return all_ok ? 0 : 1;
+}
+
+}  // namespace
+
+void add_accuracy(CLI::App& bench, int& exit_code) {
+  auto o = std::make_shared<AccuracyCommandOptions>();
+  CLI::App* c = cli::add_command(bench, "accuracy",
+                                 "the virtual performer through the pipeline, scored per segment");
+  c->add_option("--motion", o->motion, "motion name, comma list or 'all'");
+  c->add_option("--disturbance", o->disturbance,
+                "none|magnet|desk|both|arm_magnet, comma list or 'all'");
+  c->add_option("--seed", o->seed, "random seed")->check(CLI::NonNegativeNumber);
+  c->add_option("--seeds", o->seeds, "comma list of seeds (default: --seed)");
+  c->add_option("--rate", o->rate_hz, "sensor rate, Hz")->check(CLI::PositiveNumber);
+  c->add_option("--heading", o->heading, "calibration heading source (normals: as the daemon)")
+      ->check(CLI::IsMember({"normals", "pelvis", "mean", "truth"}));
+  c->add_flag("--calibration-moves", o->calibration_moves,
+              "calibrate with N-pose + calibration moves (knee bends, elbow curls) before each "
+              "motion");
+  c->add_flag("--gyro-scale-calibration", o->gyro_scale_calibration,
+              "calibrate each sensor's gyro scale first (table spins, as a user does once per "
+              "sensor) and divide it out");
+  c->add_flag("--warmup", o->warmup,
+              "the sensors run for 22 s of walking and turning before the calibration stand");
+  c->add_option("--mag", o->mag, "with magnetometers (9D): on|off (off: 6D)")
+      ->check(CLI::IsMember({"on", "off"}));
+  c->add_option("--frame-rate", o->frame_rate_hz, "pose frames per second (0: one per sample time)")
+      ->check(CLI::NonNegativeNumber);
+  c->add_option("--clips", o->clips,
+                "every .bvh file in this folder as a motion (calibration procedure first)")
+      ->check(CLI::ExistingDirectory);
+  c->add_option("--filter-param", o->filter_param,
+                "AttitudeFilter overrides, comma list of name=value");
+  c->add_option("--sensor-errors", o->sensor_errors,
+                "only these consumer-MEMS error groups, comma list of mount,mag,gyr,acc,timing "
+                "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)");
+  c->add_flag("--ideal", o->ideal,
+              "ideal sensors (no noise, bias, misalignment): isolates the pipeline");
+  c->add_flag("--markdown", o->markdown, "also print a markdown table on stderr");
+  c->callback([o, &exit_code] { exit_code = run_accuracy(*o); });
 }
 
 }  // namespace mocap::bench

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,7 @@
 
 #include "bench.hpp"
 #include "daemon_harness.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/core/time.hpp"
 
 namespace mocap::bench {
@@ -43,26 +44,15 @@ DaemonCounts counts(const std::string& status) {
   return c;
 }
 
-}  // namespace
+/// mocap bench capacity's command line (declared in add_capacity).
+struct CapacityOptions {
+  int sensors = 20;
+  double rate_hz = 1000, seconds = 10;
+};
 
-int run_capacity(int argc, char** argv) {
-  CliArgs args;
-  args.option("sensors", "number of simulated sensors (default 20)")
-      .option("rate", "sample rate per sensor in Hz (default 1000)")
-      .option("seconds", "measured duration (default 10)")
-      .flag("help", "show this help");
-  double sensors_d = 20, rate = 1000, seconds = 10;
-  if (!args.parse(argc, argv) || args.has("help") || !args.positional().empty() ||
-      !args.get_double("sensors", sensors_d) || !args.get_double("rate", rate) ||
-      !args.get_double("seconds", seconds) || sensors_d < 1 || sensors_d > 64 ||
-      !(rate > 0 && rate <= 4000) || !(seconds >= 1)) {
-    std::fprintf(
-        stderr,
-        "usage: mocap bench capacity [--sensors N (1..64)] [--rate HZ] [--seconds S>=1]\n%s",
-        args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  const int sensors = static_cast<int>(sensors_d);
+int run_capacity(const CapacityOptions& o) {
+  const int sensors = o.sensors;
+  const double rate = o.rate_hz, seconds = o.seconds;
   const double load_before = load_average_1m();
   RigOptions ro;
   ro.sensors = sensors;
@@ -146,6 +136,19 @@ int run_capacity(int argc, char** argv) {
     std::fprintf(stderr, "mocap bench capacity: %s\n", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+void add_capacity(CLI::App& bench, int& exit_code) {
+  auto o = std::make_shared<CapacityOptions>();
+  CLI::App* c = cli::add_command(bench, "capacity",
+                                 "sensors x rate through mocapd without drops, and its CPU use");
+  c->add_option("--sensors", o->sensors, "number of simulated sensors")->check(CLI::Range(1, 64));
+  c->add_option("--rate", o->rate_hz, "sample rate per sensor, Hz")
+      ->check(CLI::Range(1e-9, 4000.0));
+  c->add_option("--seconds", o->seconds, "measured duration, s")->check(CLI::Range(1.0, 1e6));
+  c->callback([o, &exit_code] { exit_code = run_capacity(*o); });
 }
 
 }  // namespace mocap::bench

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "bench.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/eval/madgwick.hpp"
 #include "mocap/eval/mahony.hpp"
 #include "mocap/eval/run_trial.hpp"
@@ -35,22 +37,7 @@ double ns_per_update(Make make, const std::vector<ImuSample>& samples, int round
   return best;
 }
 
-}  // namespace
-
-int run_filter(int argc, char** argv) {
-  std::string path;
-  int rounds = 9;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--rounds" && i + 1 < argc) {
-      rounds = std::max(1, std::atoi(argv[++i]));
-    } else if (a.rfind("--", 0) != 0 && path.empty()) {
-      path = a;
-    } else {
-      std::fprintf(stderr, "usage: mocap bench filter [TRIAL.csv(.gz)] [--rounds N]\n");
-      return 2;
-    }
-  }
+int run_filter(std::string path, int rounds) {
   if (path.empty()) {
     const auto files = list_broad_trials(default_broad_dir());
     if (files.empty()) {
@@ -112,6 +99,22 @@ int run_filter(int argc, char** argv) {
               rows[0].ns6 / rows[1].ns6, rows[0].ns9 / rows[1].ns9);
   std::printf("  \"checksum\": %.6f\n}\n", sink);
   return 0;
+}
+
+}  // namespace
+
+void add_filter(CLI::App& bench, int& exit_code) {
+  struct Options {
+    std::string trial;
+    int rounds = 9;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* c = cli::add_command(bench, "filter",
+                                 "ns per update of each attitude algorithm, ratio to Madgwick");
+  c->add_option("TRIAL", o->trial, "a BROAD trial CSV(.gz) (default: the first shared trial)");
+  c->add_option("--rounds", o->rounds, "timed rounds (the best counts)")
+      ->check(CLI::Range(1, 1000000));
+  c->callback([o, &exit_code] { exit_code = run_filter(o->trial, o->rounds); });
 }
 
 }  // namespace mocap::bench

@@ -18,13 +18,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "bench.hpp"
 #include "daemon_harness.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/core/thread_priority.hpp"
 #include "mocap/core/time.hpp"
 
@@ -71,38 +72,15 @@ double percentile(std::vector<double> v, double p) {
   return v[k];
 }
 
-}  // namespace
+/// mocap bench latency's command line (declared in add_latency).
+struct LatencyOptions {
+  int sensors = 17, rt_priority = 20;
+  double rate_hz = 200, seconds = 10;
+};
 
-int run_latency(int argc, char** argv) {
-  CliArgs args;
-  args.option("sensors", "number of simulated sensors (default 17, max 32)")
-      .option("rate", "sample rate per sensor in Hz (default 200)")
-      .option("seconds", "measured duration (default 10)")
-      .option("realtime-priority",
-              "SCHED_FIFO priority for mocapd and the bench threads, 0 = normal (default 20)")
-      .flag("help", "show this help");
-  if (!args.parse(argc, argv) || args.has("help") || !args.positional().empty()) {
-    std::fprintf(stderr,
-                 "usage: mocap bench latency [--sensors N] [--rate HZ] [--seconds S] "
-                 "[--realtime-priority N]\n%s",
-                 args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  double sensors_d = 17, rate = 200, seconds = 10, rt_d = 20;
-  args.get_double("sensors", sensors_d);
-  args.get_double("rate", rate);
-  args.get_double("seconds", seconds);
-  args.get_double("realtime-priority", rt_d);
-  const int sensors = static_cast<int>(sensors_d);
-  const int rt_priority = static_cast<int>(rt_d);
-  if (sensors < 1 || sensors > 32 || !(rate > 0 && rate <= 2000) || !(seconds > 0) ||
-      rt_priority < 0 || rt_priority > kMaxRealtimePriority) {
-    std::fprintf(stderr,
-                 "mocap bench latency: need 1..32 sensors, 0 < rate <= 2000, seconds > 0, "
-                 "realtime priority 0..%d\n",
-                 kMaxRealtimePriority);
-    return 2;
-  }
+int run_latency(const LatencyOptions& o) {
+  const int sensors = o.sensors, rt_priority = o.rt_priority;
+  const double rate = o.rate_hz, seconds = o.seconds;
   // Granted to a probe thread <=> granted to mocapd (same user, same limits). A probe, because
   // the main thread's policy would be inherited by the mocapd it forks.
   std::string rt_error;
@@ -238,6 +216,22 @@ int run_latency(int argc, char** argv) {
     std::fprintf(stderr, "mocap bench latency: %s\n", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+void add_latency(CLI::App& bench, int& exit_code) {
+  auto o = std::make_shared<LatencyOptions>();
+  CLI::App* c = cli::add_command(bench, "latency",
+                                 "device bytes on a pty to the JSON line over TCP, percentiles");
+  c->add_option("--sensors", o->sensors, "number of simulated sensors")->check(CLI::Range(1, 32));
+  c->add_option("--rate", o->rate_hz, "sample rate per sensor, Hz")
+      ->check(CLI::Range(1e-9, 2000.0));
+  c->add_option("--seconds", o->seconds, "measured duration, s")->check(CLI::PositiveNumber);
+  c->add_option("--realtime-priority", o->rt_priority,
+                "SCHED_FIFO priority for mocapd and the bench threads, 0 = normal")
+      ->check(CLI::Range(0, kMaxRealtimePriority));
+  c->callback([o, &exit_code] { exit_code = run_latency(*o); });
 }
 
 }  // namespace mocap::bench

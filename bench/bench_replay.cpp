@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -18,7 +19,7 @@
 
 #include "bench.hpp"
 #include "daemon_harness.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/replay.hpp"
@@ -94,25 +95,16 @@ uint64_t generate_session(const std::string& path, double minutes, double rate_h
   return count;
 }
 
-}  // namespace
+/// mocap bench replay's command line (declared in add_replay).
+struct ReplayBenchOptions {
+  double minutes = 60, rate_hz = 100;
+  std::string dir = "/tmp";
+};
 
-int run_replay(int argc, char** argv) {
-  CliArgs args;
-  args.option("minutes", "session length in minutes (default 60)")
-      .option("rate", "sample rate per sensor in Hz (default 100)")
-      .option("dir", "where to write the session and BVH (default /tmp); removed afterwards")
-      .flag("help", "show this help");
-  double minutes = 60, rate = 100;
-  if (!args.parse(argc, argv) || args.has("help") || !args.positional().empty() ||
-      !args.get_double("minutes", minutes) || !args.get_double("rate", rate) || !(minutes > 0) ||
-      !(rate > 0 && rate <= 1000)) {
-    std::fprintf(stderr, "usage: mocap bench replay [--minutes M] [--rate HZ] [--dir DIR]\n%s",
-                 args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
+int run_replay(const ReplayBenchOptions& o) {
+  const double minutes = o.minutes, rate = o.rate_hz;
   namespace fs = std::filesystem;
-  const fs::path dir =
-      fs::path(args.get_or("dir", "/tmp")) / ("mocap-bench-replay-" + std::to_string(::getpid()));
+  const fs::path dir = fs::path(o.dir) / ("mocap-bench-replay-" + std::to_string(::getpid()));
   std::error_code ec;
   fs::create_directories(dir, ec);
   const std::string session = (dir / "session.mcap").string();
@@ -185,6 +177,19 @@ int run_replay(int argc, char** argv) {
   }
   fs::remove_all(dir, ec);
   return rc;
+}
+
+}  // namespace
+
+void add_replay(CLI::App& bench, int& exit_code) {
+  auto o = std::make_shared<ReplayBenchOptions>();
+  CLI::App* c = cli::add_command(
+      bench, "replay", "a long recorded session through filter, skeleton and BVH, vs reading it");
+  c->add_option("--minutes", o->minutes, "session length, minutes")->check(CLI::PositiveNumber);
+  c->add_option("--rate", o->rate_hz, "sample rate per sensor, Hz")
+      ->check(CLI::Range(1e-9, 1000.0));
+  c->add_option("--dir", o->dir, "where to write the session and BVH; removed afterwards");
+  c->callback([o, &exit_code] { exit_code = run_replay(*o); });
 }
 
 }  // namespace mocap::bench

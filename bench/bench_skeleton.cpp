@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bench.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/skeleton/quat_math.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 #if __has_include("mocap/sim/performer.hpp")
@@ -204,17 +205,7 @@ Accuracy accuracy_with_performer(const std::string& motion, bool ankle_contact,
 }
 #endif
 
-}  // namespace
-
-int run_skeleton(int argc, char** argv) {
-  int avatars = 150, frames = 200;
-  double stance_hysteresis_m = 0;  // 0: the RootMotionOptions default
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--avatars")) avatars = std::max(1, std::atoi(argv[i + 1]));
-    if (!std::strcmp(argv[i], "--frames")) frames = std::max(10, std::atoi(argv[i + 1]));
-    if (!std::strcmp(argv[i], "--stance-hysteresis-m"))
-      stance_hysteresis_m = std::atof(argv[i + 1]);
-  }
+int run_skeleton(int avatars, int frames, double stance_hysteresis_m) {
   std::mt19937 rng(7);
   const BodyModel model;
   const JointLimits limits = default_joint_limits();
@@ -343,6 +334,25 @@ int run_skeleton(int argc, char** argv) {
 #endif
   std::printf("\n}\n");
   return sink == 12345.678 ? 1 : 0;
+}
+
+}  // namespace
+
+void add_skeleton(CLI::App& bench, int& exit_code) {
+  struct Options {
+    int avatars = 150, frames = 200;
+    double stance_hysteresis_m = 0;  // 0: the RootMotionOptions default
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* c = cli::add_command(bench, "skeleton",
+                                 "forward kinematics and joint limits for a crowd of avatars");
+  c->add_option("--avatars", o->avatars, "avatars solved per frame")->check(CLI::Range(1, 100000));
+  c->add_option("--frames", o->frames, "frames timed")->check(CLI::Range(10, 10000000));
+  c->add_option("--stance-hysteresis-m", o->stance_hysteresis_m,
+                "root motion's stance hysteresis, m (0: the default)")
+      ->check(CLI::NonNegativeNumber);
+  c->callback(
+      [o, &exit_code] { exit_code = run_skeleton(o->avatars, o->frames, o->stance_hysteresis_m); });
 }
 
 }  // namespace mocap::bench

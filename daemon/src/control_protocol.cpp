@@ -59,9 +59,9 @@ std::optional<ControlRequest> parse_control_request(std::string_view line, std::
   if (cmd == "reset-heading") return no_args(ControlCommand::reset_heading);
   if (cmd == "quit") return no_args(ControlCommand::quit);
   if (cmd == "calibrate") {
-    const std::string_view pose = next_word(rest);
-    if ((pose != "npose" && pose != "tpose") || !rest.empty()) {
-      error = "usage: calibrate npose|tpose";
+    const std::string_view pose = next_word(rest);  // none: the configured calibration.pose
+    if ((!pose.empty() && pose != "npose" && pose != "tpose") || !rest.empty()) {
+      error = "usage: calibrate [npose|tpose]";
       return std::nullopt;
     }
     r.command = ControlCommand::calibrate;
@@ -90,7 +90,7 @@ std::string format_control_request(const ControlRequest& r) {
     case ControlCommand::status:
       return "status\n";
     case ControlCommand::calibrate:
-      return "calibrate " + r.argument + "\n";
+      return r.argument.empty() ? "calibrate\n" : "calibrate " + r.argument + "\n";
     case ControlCommand::reset_heading:
       return "reset-heading\n";
     case ControlCommand::record_start:

@@ -1,6 +1,7 @@
 // Daemon assembly: devices feed the pipeline, the pipeline feeds the outputs, the control
 // socket drives commands and reports status as JSON.
 #include "mocap/daemon/daemon.hpp"
+#include "mocap/daemon/outputs.hpp"
 
 #include <poll.h>
 
@@ -146,12 +147,16 @@ std::string Daemon::handle(const ControlRequest& r) {
   switch (r.command) {
     case ControlCommand::status:
       return status_json();
-    case ControlCommand::calibrate:
-      pipeline_->calibrate(r.argument == "tpose" ? CalibrationPose::tpose : CalibrationPose::npose);
-      ok["message"] = "calibration (" + r.argument + ") in " +
+    case ControlCommand::calibrate: {
+      // No pose named: the configured one (calibration.pose).
+      const std::string pose =
+          r.argument.empty() ? std::string(to_string(cfg_.calibration.pose)) : r.argument;
+      pipeline_->calibrate(pose == "tpose" ? CalibrationPose::tpose : CalibrationPose::npose);
+      ok["message"] = "calibration (" + pose + ") in " +
                       std::to_string(static_cast<int>(std::lround(cfg_.calibration.countdown_s))) +
                       " s: hold the pose";
       return ok.dump();
+    }
     case ControlCommand::reset_heading:
       pipeline_->reset_heading();
       ok["message"] = "heading reset";
@@ -207,7 +212,11 @@ std::string Daemon::status_json() const {
   const PipelineStatus st = pipeline_->status();
   nlohmann::json j;
   j["ok"] = true;
-  j["uptime_s"] = ns_to_s(monotonic_ns() - started_ns_);
+  // Numbers rounded to what they mean (ms, 0.1 s): never 0.30000000000000004.
+  const auto round_to = [](double v, double per_unit) {
+    return std::round(v * per_unit) / per_unit;  // the nearest double to the decimal
+  };
+  j["uptime_s"] = round_to(ns_to_s(monotonic_ns() - started_ns_), 1000);
   j["frame"] = st.frame.frame;
   j["samples"] = st.samples;
   j["rejected_samples"] = st.rejected;
@@ -215,7 +224,7 @@ std::string Daemon::status_json() const {
   j["rate_hz"] = cfg_.pipeline.rate_hz;
   j["calibrated"] = (st.frame.flags & kFrameCalibrated) != 0;
   j["calibrating"] = (st.frame.flags & kFrameCalibrating) != 0;
-  j["calib_countdown_s"] = st.frame.calib_countdown_s;
+  j["calib_countdown_s"] = round_to(st.frame.calib_countdown_s, 10);
   j["demo"] = (st.frame.flags & kFrameDemo) != 0;
   {
     const CalibrationProgress& c = st.calibration;
@@ -227,6 +236,20 @@ std::string Daemon::status_json() const {
     std::lock_guard lock(rec_mu_);
     j["recording"] = recording_path_;
   }
+  {
+    // Where to reach this daemon: the streams (a port 0 JSON stream: the port it picked) and
+    // the control socket.
+    const OutputsConfig& o = cfg_.outputs;
+    nlohmann::json streams;
+    streams["json"] = {{"enabled", o.json.enabled},
+                       {"bind", o.json.bind},
+                       {"port", o.json.enabled ? json_stream_port(parts_.sinks) : o.json.port}};
+    streams["vmc"] = {{"enabled", o.vmc.enabled}, {"host", o.vmc.host}, {"port", o.vmc.port}};
+    streams["vrchat"] = {
+        {"enabled", o.vrchat.enabled}, {"host", o.vrchat.host}, {"port", o.vrchat.port}};
+    streams["control_socket"] = control_path_;
+    j["streams"] = streams;
+  }
   nlohmann::json sensors = nlohmann::json::array();
   for (uint32_t i = 0; i < st.frame.sensor_count && i < static_cast<uint32_t>(kMaxSensors); ++i) {
     const SensorStatus& s = st.frame.sensors[i];
@@ -234,8 +257,9 @@ std::string Daemon::status_json() const {
     e["name"] = std::string(s.name, strnlen(s.name, sizeof s.name));
     e["segment"] = s.segment >= 0 ? std::string(kSegmentNames[s.segment]) : std::string();
     e["state"] = kStates[std::min<int>(s.state, 4)];
-    e["rate_hz"] = std::round(s.rate_hz * 10) / 10;
-    e["age_ms"] = std::round(s.last_age_ms * 10) / 10;
+    // The status fields are floats: rounded as doubles, so 2.8 prints as 2.8.
+    e["rate_hz"] = round_to(s.rate_hz, 10);
+    e["age_ms"] = round_to(s.last_age_ms, 10);
     e["drops"] = s.drops;
     e["errors"] = s.errors;
     if (i < devices_.size()) {  // device i carries sensor i (one sensor per configured device)
@@ -250,8 +274,8 @@ std::string Daemon::status_json() const {
     e["mag_disturbed"] = (s.flags & kSegMagDisturbed) != 0;
     e["mag_no_reference"] = (s.flags & kSegMagNoReference) != 0;
     e["calibrated"] = (s.flags & kSegCalibrated) != 0;
-    e["gyro_bias_dps"] = std::round(s.gyro_bias_dps * 1000) / 1000;
-    e["heading_sigma_deg"] = std::round(s.heading_sigma_deg * 10) / 10;
+    e["gyro_bias_dps"] = round_to(s.gyro_bias_dps, 1000);
+    e["heading_sigma_deg"] = round_to(s.heading_sigma_deg, 10);
     sensors.push_back(e);
   }
   j["sensors"] = sensors;

@@ -1,29 +1,57 @@
 // mocapctl: control client for a running mocapd (talks over its Unix-domain control socket).
-//   mocapctl status [--json] | calibrate npose|tpose | reset-heading | record start [NAME] |
-//            record stop | quit          [--socket PATH]
+//   mocapctl [--socket PATH] [--json] status | calibrate [npose|tpose] | reset-heading |
+//            record start [NAME] | record stop | quit
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/control.hpp"
 
 namespace {
 
-const char* kUsage =
-    "usage: mocapctl COMMAND [options]\n"
-    "commands:\n"
-    "  status [--json]          sensors, rates, drops, filter and calibration state\n"
-    "  calibrate npose|tpose    start a calibration (countdown, then hold the pose)\n"
-    "  reset-heading            re-align the heading (stand upright facing forward)\n"
-    "  record start [NAME]      record a session into a new file NAME inside the daemon's\n"
-    "                           recording.directory (never overwritten: an existing file is an\n"
-    "                           error); no NAME: a fresh take-YYYYMMDD-HHMMSS.mcap\n"
-    "  record stop              close the recording; prints duration, frames, samples, drops,\n"
-    "                           bytes\n"
-    "  quit                     stop the daemon\n"
-    "options:\n";
+/// mocapctl's command line: global options and one subcommand per control command, all
+/// declared in declare_options(); `line` is the control request the parsed command stands for.
+struct Options {
+  bool json = false;
+  std::string socket;
+  int timeout_ms = 5000;
+  std::string pose, record_name;
+  std::string line;
+};
+
+void declare_options(CLI::App& app, Options& o) {
+  app.add_flag("--json", o.json, "print the daemon's JSON reply (status: instead of the table)");
+  app.add_option("--socket", o.socket, "control socket (default $XDG_RUNTIME_DIR/mocapd.sock)");
+  app.add_option("--timeout-ms", o.timeout_ms, "how long to wait for the reply, ms")
+      ->check(CLI::Range(1, 3600000));
+  app.require_subcommand(1);
+  namespace cli = mocap::cli;
+  cli::add_command(app, "status", "sensors, rates, drops, filter and calibration state")
+      ->callback([&o] { o.line = "status"; });
+  CLI::App* cal = cli::add_command(
+      app, "calibrate",
+      "start a calibration (countdown, then hold the pose); no POSE: the daemon's configured "
+      "calibration.pose");
+  cal->add_option("POSE", o.pose, "npose or tpose")->check(CLI::IsMember({"npose", "tpose"}));
+  cal->callback([&o] { o.line = o.pose.empty() ? "calibrate" : "calibrate " + o.pose; });
+  cli::add_command(app, "reset-heading", "re-align the heading (stand upright facing forward)")
+      ->callback([&o] { o.line = "reset-heading"; });
+  CLI::App* rec = cli::add_command(app, "record", "start or stop recording a session");
+  rec->require_subcommand(1);
+  CLI::App* start = cli::add_command(
+      *rec, "start",
+      "record into a new file NAME inside the daemon's recording.directory (never overwritten: "
+      "an existing file is an error); no NAME: a fresh take-YYYYMMDD-HHMMSS.mcap");
+  start->add_option("NAME", o.record_name, "file name of the take");
+  start->callback(
+      [&o] { o.line = o.record_name.empty() ? "record start" : "record start " + o.record_name; });
+  cli::add_command(*rec, "stop",
+                   "close the recording; prints duration, frames, samples, drops, bytes")
+      ->callback([&o] { o.line = "record stop"; });
+  cli::add_command(app, "quit", "stop the daemon")->callback([&o] { o.line = "quit"; });
+}
 
 void print_status_table(const nlohmann::json& j) {
   std::printf("mocapd: up %.0f s, frame %llu, %llu samples, %s%s%s\n", j.value("uptime_s", 0.0),
@@ -57,45 +85,22 @@ void print_status_table(const nlohmann::json& j) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  mocap::CliArgs args;
-  args.flag("help", "show this help")
-      .flag("version", "print the version")
-      .flag("json", "status: print the daemon's JSON reply")
-      .option("socket", "control socket (default $XDG_RUNTIME_DIR/mocapd.sock)")
-      .option("timeout-ms", "how long to wait for the reply (default 5000)");
-  if (!args.parse(argc, argv)) {
-    std::fprintf(stderr, "mocapctl: %s\n", args.error().c_str());
-    return 2;
-  }
-  if (args.has("version")) {
-    std::printf("mocapctl 0.1.0\n");
-    return 0;
-  }
-  const auto& pos = args.positional();
-  if (args.has("help") || pos.empty()) {
-    std::printf("%s%s", kUsage, args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  std::string line;
-  for (const auto& p : pos)
-    line += (line.empty() ? "" : " ") + p;
+  CLI::App app{"mocapctl: control client for a running mocapd", "mocapctl"};
+  mocap::cli::setup_program(app);
+  Options o;
+  declare_options(app, o);
+  if (auto done = mocap::cli::parse(app, argc, argv)) return *done;
   std::string err;
-  auto req = mocap::daemon::parse_control_request(line, err);
+  auto req = mocap::daemon::parse_control_request(o.line, err);
   if (!req) {
-    std::fprintf(stderr, "mocapctl: %s\n%s", err.c_str(), kUsage);
-    return 2;
-  }
-  long timeout = 5000;
-  if (!args.get_int("timeout-ms", timeout)) {
-    std::fprintf(stderr, "mocapctl: %s\n", args.error().c_str());
+    std::fprintf(stderr, "mocapctl: %s\n", err.c_str());
     return 2;
   }
   std::string reply;
   try {
-    const std::string path =
-        args.has("socket") ? *args.get("socket") : mocap::daemon::default_control_socket();
+    const std::string path = o.socket.empty() ? mocap::daemon::default_control_socket() : o.socket;
     reply = mocap::daemon::control_call(path, mocap::daemon::format_control_request(*req),
-                                        static_cast<int>(timeout));
+                                        o.timeout_ms);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mocapctl: %s\n", e.what());
     return 1;
@@ -109,9 +114,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "mocapctl: %s\n", j.value("error", std::string("failed")).c_str());
     return 1;
   }
-  if (req->command == mocap::daemon::ControlCommand::status && !args.has("json")) {
+  if (req->command == mocap::daemon::ControlCommand::status && !o.json) {
     print_status_table(j);
-  } else if (args.has("json")) {
+  } else if (o.json) {
     std::printf("%s\n", reply.c_str());
   } else {
     std::string msg = j.value("message", std::string("ok"));

@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/daemon_setup.hpp"
@@ -20,58 +20,73 @@ using namespace mocap::daemon;
 
 namespace {
 
-const char* kUsage =
-    "usage: mocapd [--config FILE | --demo] [--set KEY=VALUE ...] [options]\n"
-    "       mocapd --check-config FILE [--set KEY=VALUE ...]\n"
-    "       mocapd --print-config [--config FILE] [--set KEY=VALUE ...]\n"
-    "       mocapd --replay SESSION [--speed 0|1|X] [--config FILE]\n"
-    "options:\n";
+/// mocapd's command line: every option declared in declare_options().
+struct Options {
+  std::string config, check_config, replay;
+  std::vector<std::string> sets;
+  bool print_config = false, print_config_reference = false, demo = false;
+  double speed = 1.0;
+  std::string log_level;
+};
+
+void declare_options(CLI::App& app, Options& o) {
+  app.footer(
+      "Forms:\n"
+      "  mocapd [--config FILE | --demo] [--set KEY=VALUE ...] [options]\n"
+      "  mocapd --check-config FILE [--set KEY=VALUE ...]\n"
+      "  mocapd --print-config [--config FILE] [--set KEY=VALUE ...]\n"
+      "  mocapd --replay SESSION [--speed 0|1|X] [--config FILE]\n\n"
+      "Configuration keys (--set SECTION.KEY=VALUE; --print-config-reference describes each):\n" +
+      config_key_summary());
+  CLI::Option* config = app.add_option("--config", o.config, "rig configuration (TOML)");
+  CLI::Option* check =
+      app.add_option("--check-config", o.check_config,
+                     "validate a configuration file and exit (runs nothing: not with --config, "
+                     "--demo, --replay or --print-config)");
+  CLI::Option* print =
+      app.add_flag("--print-config", o.print_config,
+                   "print the effective configuration (defaults included) and exit");
+  app.add_flag("--print-config-reference", o.print_config_reference,
+               "print the configuration keys' reference (markdown, as in docs/configuration.md) "
+               "and exit");
+  cli::add_multi(app, "--set", o.sets,
+                 "override a configuration key, e.g. --set outputs.json.port=7400");
+  CLI::Option* demo = app.add_flag(
+      "--demo", o.demo,
+      "run the virtual performer's simulated sensors (config/demo.toml rig; live, so not "
+      "with --replay)");
+  CLI::Option* replay =
+      app.add_option("--replay", o.replay,
+                     "play a recorded session through the pipeline instead of live sensors, "
+                     "and exit");
+  app.add_option("--speed", o.speed,
+                 "replay speed (of --replay): 1 = real time, 0 = as fast as possible, X = factor")
+      ->check(CLI::NonNegativeNumber)
+      ->needs(replay);
+  app.add_option("--log-level", o.log_level, "daemon log level (overrides daemon.log_level)");
+  // --check-config checks one file and runs nothing: every other mode conflicts with it.
+  check->excludes(config)->excludes(print)->excludes(demo)->excludes(replay);
+  demo->excludes(replay);
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CliArgs args;
-  args.flag("help", "show this help")
-      .flag("version", "print the version")
-      .option("config", "rig configuration (TOML)")
-      .option("check-config", "validate a configuration file and exit")
-      .flag("print-config", "print the effective configuration (defaults included) and exit")
-      .flag("print-config-reference",
-            "print the configuration keys' reference (markdown, as in docs/configuration.md)")
-      .multi("set", "override a configuration key, e.g. --set outputs.json.port=7400")
-      .flag("demo", "run the virtual performer's simulated sensors (config/demo.toml rig)")
-      .option("replay", "play a recorded session through the pipeline and exit")
-      .option("speed", "replay speed: 1 = real time (default), 0 = as fast as possible, X = factor")
-      .option("log-level", "daemon log level (overrides daemon.log_level)");
-  if (!args.parse(argc, argv)) {
-    std::fprintf(stderr, "mocapd: %s\n", args.error().c_str());
-    return 2;
-  }
-  if (args.has("version")) {
-    std::printf("mocapd 0.1.0\n");
-    return 0;
-  }
-  if (args.has("help") || !args.positional().empty()) {
-    std::printf(
-        "%s%sconfiguration keys (--set SECTION.KEY=VALUE; --print-config-reference "
-        "describes each):\n%s",
-        kUsage, args.help().c_str(), config_key_summary().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  if (args.has("print-config-reference")) {
+  CLI::App app{"mocapd: the motion-capture daemon", "mocapd"};
+  cli::setup_program(app);
+  Options o;
+  declare_options(app, o);
+  if (auto done = cli::parse(app, argc, argv)) return *done;
+  if (o.print_config_reference) {
     std::printf("%s", config_reference_markdown().c_str());
     return 0;
   }
-  std::vector<std::string> sets = args.get_all("set");
-  if (auto lvl = args.get("log-level")) sets.push_back("daemon.log_level=" + *lvl);
+  std::vector<std::string> sets = o.sets;
+  if (!o.log_level.empty()) sets.push_back("daemon.log_level=" + o.log_level);
 
   // Configuration: --check-config FILE, --config FILE, or the demo rig.
-  const bool check = args.has("check-config");
-  std::string config_path = check ? *args.get("check-config") : args.get_or("config", "");
-  if (check && args.has("config")) {
-    std::fprintf(stderr, "mocapd: give --check-config FILE or --config FILE, not both\n");
-    return 2;
-  }
+  const bool check = !o.check_config.empty();
+  const std::string config_path = check ? o.check_config : o.config;
   ConfigErrors errors;
   std::optional<Config> cfg;
   if (!config_path.empty())
@@ -86,8 +101,7 @@ int main(int argc, char** argv) {
                  errors.errors.size(), errors.errors.size() == 1 ? "" : "s");
     return 1;
   }
-  if (!check && !args.has("demo") && !args.has("replay") && !args.has("print-config") &&
-      cfg->sensors.empty()) {
+  if (!check && !o.demo && o.replay.empty() && !o.print_config && cfg->sensors.empty()) {
     std::fprintf(stderr,
                  "mocapd: no sensors configured: give --config RIG.toml (see config/) or --demo\n");
     return 2;
@@ -97,7 +111,7 @@ int main(int argc, char** argv) {
                 cfg->sensors.size() == 1 ? "" : "s");
     return 0;
   }
-  if (args.has("print-config")) {
+  if (o.print_config) {
     std::fputs(config_to_toml(*cfg).c_str(), stdout);
     return 0;
   }
@@ -116,14 +130,8 @@ int main(int argc, char** argv) {
   LogSink sink(stderr);
   Logger log(sink, "mocapd", cfg->daemon.log_level);
 
-  if (auto replay = args.get("replay")) {
-    double speed = 1.0;
-    if (!args.get_double("speed", speed) || speed < 0) {
-      std::fprintf(stderr, "mocapd: --speed needs a number >= 0\n");
-      return 2;
-    }
-    return run_replay_daemon(*replay, speed, args.has("config") ? &*cfg : nullptr, sets, sfd, log);
-  }
+  if (!o.replay.empty())
+    return run_replay_daemon(o.replay, o.speed, o.config.empty() ? nullptr : &*cfg, sets, sfd, log);
 
   // One instance per runtime directory: the lock comes before any device, port or shared
   // memory is touched, so a second mocapd changes nothing.
@@ -141,7 +149,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    LiveSetup live = make_live(*cfg, args.has("demo"), log);
+    LiveSetup live = make_live(*cfg, o.demo, log);
     Daemon d(live.cfg, std::move(live.parts), log);
     d.start();
     d.wait(sfd);

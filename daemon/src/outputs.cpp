@@ -81,6 +81,7 @@ class JsonSink final : public FrameSink {
     log.info("pose JSON stream on %s:%u", c.bind.c_str(), server_.port());
   }
   void publish(const PoseFrame& f) override { server_.publish(f); }
+  uint16_t port() const { return server_.port(); }
 
  private:
   PoseJsonServer server_;
@@ -144,6 +145,12 @@ std::vector<std::unique_ptr<FrameSink>> make_outputs(const Config& cfg, Logger& 
   if (cfg.outputs.vrchat.enabled)
     out.push_back(std::make_unique<VrchatSink>(cfg.outputs.vrchat, cfg.body.model.height_m, log));
   return out;
+}
+
+int json_stream_port(const std::vector<std::unique_ptr<FrameSink>>& outputs) {
+  for (const auto& o : outputs)
+    if (const auto* j = dynamic_cast<const JsonSink*>(o.get())) return j->port();
+  return 0;
 }
 
 }  // namespace mocap::daemon

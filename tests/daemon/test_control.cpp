@@ -57,7 +57,13 @@ TEST(ControlProtocol, ParsesCommands) {
 TEST(ControlProtocol, RejectsBadRequests) {
   std::string err;
   EXPECT_FALSE(parse_control_request("", err));
-  EXPECT_FALSE(parse_control_request("calibrate", err));
+  // No pose: the daemon's configured calibration.pose (mocapctl calibrate).
+  auto r = parse_control_request("calibrate", err);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->command, ControlCommand::calibrate);
+  EXPECT_EQ(r->argument, "");
+  EXPECT_EQ(format_control_request(*r), "calibrate\n");
+  EXPECT_FALSE(parse_control_request("calibrate npose tpose", err));
   EXPECT_NE(err.find("usage: calibrate"), std::string::npos);
   EXPECT_FALSE(parse_control_request("calibrate apose", err));
   EXPECT_FALSE(parse_control_request("status now", err));

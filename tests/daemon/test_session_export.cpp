@@ -25,7 +25,8 @@ namespace {
 const std::string kMocap = std::string(MOCAP_BINARY_DIR) + "/bin/mocap";
 
 int run(const std::string& args, const std::string& err_file) {
-  const int status = std::system((kMocap + " export " + args + " 2> " + err_file).c_str());
+  // Both streams: the summary (a JSON line on stdout) and the diagnostics (stderr).
+  const int status = std::system((kMocap + " export " + args + " > " + err_file + " 2>&1").c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -114,7 +115,9 @@ TEST(SessionExport, BadInputsGiveClearErrors) {
   EXPECT_EQ(run(dir.file("missing.mocap") + " --csv " + dir.file("o.csv"), err), 1);
   EXPECT_NE(read_text(err).find("missing.mocap"), std::string::npos);
   EXPECT_EQ(run(ses, err), 2);  // neither --csv nor --bvh
-  EXPECT_NE(read_text(err).find("usage"), std::string::npos);
+  EXPECT_NE(read_text(err).find("give one output: --csv, --bvh, --gltf or --opensim"),
+            std::string::npos)
+      << read_text(err);
 }
 
 namespace {
@@ -178,7 +181,7 @@ TEST(SessionExport, BvhReadsBackThroughTheSkeletonsReaderWithTheRecordedBody) {
 }
 
 // Export finishes the poses for animation tools: a sensor's 200 ms dropout (its segment held by
-// the live pipeline, the sample age growing) comes out slerped across the gap, and --rate
+// the live pipeline, the sample age growing) comes out slerped across the gap, and --frame-rate
 // resamples to one fixed frame time.
 TEST(SessionExport, BridgesDropoutsAndResamples) {
   TempDir dir;
@@ -199,9 +202,9 @@ TEST(SessionExport, BridgesDropoutsAndResamples) {
     ASSERT_TRUE(w->close());
   }
   ASSERT_EQ(run(ses + " --csv " + csv, err), 0) << read_text(err);
-  EXPECT_NE(read_text(err).find("60 frames (body height 1.75 m; 20 segment-frames bridged"),
-            std::string::npos)
-      << read_text(err);
+  for (const char* fact :
+       {"\"frames\":60", "\"body_height_m\":1.75", "\"bridged_segment_frames\":20"})
+    EXPECT_NE(read_text(err).find(fact), std::string::npos) << fact << "\n" << read_text(err);
   // Row of frame 30's neck: the orientation make_pose gives frame 30 (its angle is linear in
   // time, so the slerp across the gap reproduces it), not the held one.
   std::istringstream in(read_text(csv));
@@ -219,7 +222,8 @@ TEST(SessionExport, BridgesDropoutsAndResamples) {
   EXPECT_GT(std::abs(make_pose(19).q_earth_segment[kNeck][2] - expect[2]), 0.01);
 
   // 60 frames over 590 ms at 50 Hz: 30 frames, 20 ms apart.
-  ASSERT_EQ(run(ses + " --bvh " + dir.file("d.bvh") + " --rate 50", err), 0) << read_text(err);
+  ASSERT_EQ(run(ses + " --bvh " + dir.file("d.bvh") + " --frame-rate 50", err), 0)
+      << read_text(err);
   const BvhClip clip = parse_bvh(read_text(dir.file("d.bvh")), "d.bvh");
   EXPECT_EQ(clip.frame_count, 30);
   EXPECT_NEAR(clip.frame_time_s, 0.020, 1e-9);

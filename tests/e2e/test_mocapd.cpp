@@ -21,6 +21,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -177,6 +178,18 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "status"}, &out), 0);
   EXPECT_NE(out.find("foot_r"), std::string::npos) << out;
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "calibrate", "apose"}), 2);
+  // No pose named: the configured calibration.pose (npose by default).
+  EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "calibrate"}, &out), 0);
+  EXPECT_NE(out.find("calibration (npose)"), std::string::npos) << out;
+  // status --json: where the streams and the control socket are, numbers at their precision.
+  EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "status", "--json"}, &out), 0);
+  const auto js = nlohmann::json::parse(out);
+  EXPECT_EQ(js["streams"]["json"]["port"], port);
+  EXPECT_TRUE(js["streams"]["json"]["enabled"].get<bool>());
+  EXPECT_EQ(js["streams"]["vmc"]["port"], 39539);
+  EXPECT_EQ(js["streams"]["vrchat"]["port"], 9000);
+  EXPECT_EQ(js["streams"]["control_socket"], sock);
+  EXPECT_FALSE(std::regex_search(out, std::regex("[0-9]\\.[0-9]{7,}"))) << out;
   auto bad = nlohmann::json::parse(mocap::daemon::control_call(sock, std::string(9000, 'z')));
   EXPECT_FALSE(bad["ok"].get<bool>());
 
@@ -214,13 +227,14 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   for (const char* source : {"samples", "raw"}) {
     const std::string p1 = (dir / (std::string(source) + "1.csv")).string();
     const std::string p2 = (dir / (std::string(source) + "2.csv")).string();
+    // --poses: the deprecated spelling of --csv, still accepted.
     ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mcap").string(), "--source", source,
                    "--poses", p1, "--quiet"},
                   &out),
               0)
         << out;
-    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mcap").string(), "--source", source,
-                   "--poses", p2, "--bvh", (dir / "a.bvh").string(), "--quiet"}),
+    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mcap").string(), "--source", source, "--csv",
+                   p2, "--bvh", (dir / "a.bvh").string(), "--quiet"}),
               0);
     const std::string a = slurp(p1), b = slurp(p2);
     EXPECT_GT(a.size(), 10000u);
@@ -276,8 +290,7 @@ TEST(Golden, RecordedSessionsReplayToExpectedPoses) {
     const std::string got_path =
         (fs::temp_directory_path() / ("mocap-golden-" + std::to_string(getpid()) + ".csv"))
             .string();
-    ASSERT_EQ(run({kBin + "mocap", "replay", e.path().string(), "--poses", got_path, "--quiet"}),
-              0);
+    ASSERT_EQ(run({kBin + "mocap", "replay", e.path().string(), "--csv", got_path, "--quiet"}), 0);
     std::ifstream want(expected), got(got_path);
     std::string lw, lg;
     int line = 0;
@@ -537,7 +550,7 @@ TEST(Score, ReplayOfARealClipIsScoredAgainstItsTruth) {
     const std::string poses = (dir / (std::string("p_") + use_mag + ".csv")).string();
     std::string out;
     ASSERT_EQ(run({kBin + "mocap", "replay", samples, "--calibrate", "npose@1.5", "--set",
-                   std::string("filter.use_mag=") + use_mag, "--poses", poses, "--quiet"},
+                   std::string("filter.use_mag=") + use_mag, "--csv", poses, "--quiet"},
                   &out),
               0)
         << out;

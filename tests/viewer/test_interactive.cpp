@@ -86,7 +86,7 @@ TEST(InteractiveViewer, KeysReachTheDaemonAndQQuits) {
   const char* asan = std::getenv("ASAN_OPTIONS");
   setenv("ASAN_OPTIONS", (std::string(asan ? asan : "") + ":detect_leaks=0").c_str(), 1);
   const std::string exe = MOCAP_VIEWER_EXE;
-  std::vector<std::string> args = {exe,  "--shm",  posture.name(), "--control",
+  std::vector<std::string> args = {exe,  "--shm",  posture.name(), "--socket",
                                    sock, "--size", "640x360",      "--no-vsync"};
   std::vector<char*> argv;
   for (auto& a : args)

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <string>
 
 #include "mocap/session/session_writer.hpp"
@@ -175,6 +176,40 @@ TEST_F(Render, HudShowsTextAndRecordingIndicator) {
   EXPECT_EQ(count(without, 800, 0, 960, 40, red), 0);
 }
 
+TEST_F(Render, HudFitsASmallWindowWithALongSensorName) {
+  PoseFrame f = reference_pose(dims_, Eigen::Vector3f::Zero());
+  f.flags = kFrameCalibrated;
+  f.sensor_count = 3;
+  const char* names[] = {"pelvis", "capteur_avant_bras_gau", "foot_r"};
+  for (int i = 0; i < 3; ++i) {
+    std::snprintf(f.sensors[i].name, sizeof f.sensors[i].name, "%s", names[i]);
+    f.sensors[i].segment = static_cast<int8_t>(i);
+    f.sensors[i].state = 2;  // streaming: the table's green
+    f.sensors[i].rate_hz = 100;
+  }
+  writer_->publish(f);
+  const int w = 320, h = 240;
+  const std::string args = "--shm " + shm_ + " --screenshot " + png_ +
+                           " --frames 2 --no-labels --size " + std::to_string(w) + "x" +
+                           std::to_string(h);
+  ASSERT_EQ(run(args), 0);
+  const RgbImage hud = read_png(png_);
+  ASSERT_EQ(run(args + " --no-hud"), 0);
+  const RgbImage plain = read_png(png_);
+  auto green = [](const uint8_t* p) { return p[1] > 170 && p[0] < 130 && p[2] < 140; };
+  int table = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      table += green(hud.at(x, y)) ? 1 : 0;
+  EXPECT_GT(table, 50) << "the sensor table is drawn";
+  // Text and panels stay left of the 12 px right margin: there the image is the scene alone.
+  int touched = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = w - 12; x < w; ++x)
+      touched += std::memcmp(hud.at(x, y), plain.at(x, y), 3) != 0 ? 1 : 0;
+  EXPECT_EQ(touched, 0) << "HUD pixels in the right margin";
+}
+
 TEST_F(Render, SyntheticCrowdStandsOnItsGrid) {
   const int n = 16, frames = 3;
   ASSERT_EQ(run("--source synthetic --avatars 16 --screenshot " + png_ + " --frames 3 --size " +
@@ -290,6 +325,28 @@ TEST_F(Render, MissingDaemonAndBadOptionsAreReported) {
   EXPECT_EQ(run("--size 12xfoo --screenshot " + png_), 2);
   EXPECT_EQ(run("--play /nonexistent.bvh --screenshot " + png_), 1);
   EXPECT_EQ(run("--play /nonexistent.session --screenshot " + png_), 1);
+}
+
+// --screenshot without any display server: EGL on Mesa's surfaceless platform.
+TEST(RenderWithoutDisplay, ScreenshotNeedsNoXServer) {
+  const std::string png = "/tmp/mocap-viewer-nodisplay-" + std::to_string(getpid()) + ".png";
+  const std::string cmd =
+      "env -u DISPLAY -u WAYLAND_DISPLAY ASAN_OPTIONS=\"${ASAN_OPTIONS}:detect_leaks=0\" " +
+      std::string(MOCAP_VIEWER_EXE) +
+      " --source synthetic --frames 2 --size 200x150 --screenshot " + png +
+      " 2>/tmp/mocap-viewer-nodisplay.err";
+  const int rc = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(rc));
+  ASSERT_EQ(WEXITSTATUS(rc), 0);
+  const RgbImage img = read_png(png);
+  EXPECT_EQ(img.width, 200);
+  EXPECT_EQ(img.height, 150);
+  int body = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      body += is_body(img.at(x, y)) ? 1 : 0;
+  EXPECT_GT(body, 20) << "the avatar is drawn";
+  std::remove(png.c_str());
 }
 
 }  // namespace

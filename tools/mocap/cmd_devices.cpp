@@ -3,27 +3,23 @@
 #include <signal.h>
 
 #include <cstdio>
+#include <memory>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/drivers/known_devices.hpp"
 
 namespace mocap::cmd {
 
-int run_devices(int argc, char** argv) {
-  CliArgs args;
-  args.flag("watch", "after listing, print USB attach/detach of known devices until interrupted")
-      .flag("known", "print the table of known USB ids")
-      .flag("help", "show this help");
-  if (!args.parse(argc, argv)) {
-    std::fprintf(stderr, "mocap devices: %s\n%s", args.error().c_str(), args.help().c_str());
-    return 2;
-  }
-  if (args.has("help")) {
-    std::printf("usage: mocap devices [--watch] [--known]\n%s", args.help().c_str());
-    return 0;
-  }
-  if (args.has("known")) {
+namespace {
+
+/// mocap devices' command line (declared in add_devices).
+struct DevicesOptions {
+  bool watch = false, known = false;
+};
+
+int run_devices(const DevicesOptions& o) {
+  if (o.known) {
     for (const auto& k : known_devices())
       std::printf("%04x:%04x  %-5s  %-15s %s\n", k.vid, k.pid,
                   k.kind == KnownDevice::kHid ? "hid" : "serial", k.protocol, k.what);
@@ -49,7 +45,7 @@ int run_devices(int argc, char** argv) {
     if (proto == "xbus") std::printf("baud = 115200\n");
     std::printf("segment = \"pelvis\"  # choose the body segment\n\n");
   }
-  if (!args.has("watch")) return 0;
+  if (!o.watch) return 0;
   sigset_t stop;
   sigemptyset(&stop);
   sigaddset(&stop, SIGINT);
@@ -68,6 +64,19 @@ int run_devices(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+void add_devices(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<DevicesOptions>();
+  CLI::App* c = cli::add_command(app, "devices",
+                                 "list connected devices that a driver supports, with the rig "
+                                 "config snippet of each");
+  c->add_flag("--watch", o->watch,
+              "after listing, print USB attach/detach of known devices until interrupted");
+  c->add_flag("--known", o->known, "print the table of known USB ids");
+  c->callback([o, &exit_code] { exit_code = run_devices(*o); });
 }
 
 }  // namespace mocap::cmd

@@ -1,11 +1,12 @@
 // mocap evaluate: scores an attitude algorithm on every BROAD trial of a directory with the
 // benchmark's metric and prints per-trial and mean RMS errors (total, heading, inclination).
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/eval/broad_metric.hpp"
 #include "mocap/eval/run_trial.hpp"
 #include "mocap/filter/filter_param_names.hpp"
@@ -17,47 +18,31 @@ const VqfRef* vqf_for(const std::string& name) {
   return vqf_reference(name);
 }
 
-}  // namespace
+/// mocap evaluate's command line (declared in add_evaluate).
+struct EvaluateOptions {
+  std::string dir, mode = "9d", algorithm = "default";
+  std::vector<std::string> sets;
+  bool quiet = false;
+};
 
-int run_evaluate(int argc, char** argv) {
-  CliArgs args;
-  args.option("mode", "9d (default) or 6d")
-      .option("algorithm", "default (ours), madgwick or mahony")
-      .multi("set", "override a filter parameter: --set tau_mag_s=12 (ours only)")
-      .flag("quiet", "print only the mean line")
-      .flag("help", "show this help");
-  if (!args.parse(argc, argv) || args.positional().size() > 1 || args.has("help")) {
-    std::fprintf(args.has("help") ? stdout : stderr,
-                 "%susage: mocap evaluate [DIR] [--mode 9d|6d] [--algorithm NAME]\n"
-                 "Scores all *.csv(.gz) trials in DIR (default: the shared BROAD trials).\n%s",
-                 args.error().empty() ? "" : ("mocap evaluate: " + args.error() + "\n").c_str(),
-                 args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  const auto mode = parse_filter_mode(args.get_or("mode", "9d"));
-  const auto alg = parse_filter_algorithm(args.get_or("algorithm", "default"));
-  if (!mode || !alg) {
-    std::fprintf(stderr,
-                 "mocap evaluate: bad --mode (9d|6d) or --algorithm "
-                 "(default|madgwick|mahony)\n");
-    return 2;
-  }
+int run_evaluate(const EvaluateOptions& o) {
+  const auto mode = parse_filter_mode(o.mode);
+  const auto alg = parse_filter_algorithm(o.algorithm);
   FilterParams params;
-  for (const auto& kv : args.get_all("set")) {
+  for (const auto& kv : o.sets) {
     std::string err;
     if (!set_filter_param(params, kv, err)) {
       std::fprintf(stderr, "mocap evaluate: --set %s: %s\n", kv.c_str(), err.c_str());
       return 2;
     }
   }
-  const std::string dir =
-      args.positional().empty() ? default_broad_dir() : args.positional().front();
+  const std::string dir = o.dir.empty() ? default_broad_dir() : o.dir;
   const auto files = list_broad_trials(dir);
   if (files.empty()) {
     std::fprintf(stderr, "mocap evaluate: no *.csv or *.csv.gz trials in '%s'\n", dir.c_str());
     return 1;
   }
-  const bool quiet = args.has("quiet");
+  const bool quiet = o.quiet;
   const bool nine = *mode == FilterMode::k9d;
   if (!quiet)
     std::printf("%-44s %7s %7s %7s   %s\n", "trial", "total", "heading", "incl",
@@ -107,6 +92,24 @@ int run_evaluate(int argc, char** argv) {
                   .c_str(),
               sum_t / n, sum_h / n, sum_i / n, worst, worst_name.c_str());
   return 0;
+}
+
+}  // namespace
+
+void add_evaluate(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<EvaluateOptions>();
+  CLI::App* c = cli::add_command(app, "evaluate", "score attitude filters on the BROAD trials");
+  c->add_option("DIR", o->dir,
+                "directory of *.csv(.gz) trials (default: the shared BROAD trials, " +
+                    default_broad_dir() + ")");
+  c->add_option("--mode", o->mode, "9d or 6d")
+      ->check(CLI::IsMember({"9d", "6d"}, CLI::ignore_case));
+  c->add_option("--algorithm", o->algorithm, "default (ours), madgwick or mahony")
+      ->check(CLI::IsMember({"default", "ours", "madgwick", "mahony"}));
+  cli::add_multi(*c, "--set", o->sets,
+                 "override a filter parameter: --set tau_mag_s=12 (ours only)");
+  c->add_flag("--quiet", o->quiet, "print only the mean line");
+  c->callback([o, &exit_code] { exit_code = run_evaluate(*o); });
 }
 
 }  // namespace mocap::cmd

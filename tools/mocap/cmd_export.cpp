@@ -5,14 +5,16 @@
 // a torn tail is reported; everything intact is exported.
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/session/session_reader.hpp"
 #include "mocap/skeleton/body_model.hpp"
@@ -21,21 +23,20 @@
 #include "mocap/skeleton/gltf.hpp"
 #include "mocap/skeleton/interpolation.hpp"
 #include "mocap/skeleton/opensim.hpp"
+#include "run_summary.hpp"
 
 namespace mocap::cmd {
 namespace {
 
 constexpr const char* kExportUsage =
-    "usage: mocap export SESSION (--csv OUT.csv | --bvh OUT.bvh | --gltf OUT.glb |\n"
-    "                             --opensim OUT.sto) [--rate HZ]\n"
     "Converts the poses recorded in SESSION. CSV columns: t (seconds since the recording\n"
     "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n"
     "BVH: N-pose rest, centimetres, the recorded body. glTF: binary .glb, one node per segment\n"
     "named like the BVH bones, a skin, one animation (rotations, root translation), metres.\n"
     "OpenSim: an OpenSense orientations table (pelvis_imu, femur_r_imu, ...: w,x,y,z in\n"
     "OpenSim's y-up ground frame). BVH, glTF and OpenSim are resampled to one fixed frame time\n"
-    "(the recorded pipeline rate or --rate). A sensor's dropout of up to 0.5 s is bridged (its\n"
-    "segment slerped across the gap).\n"
+    "(the recorded pipeline rate or --frame-rate). A sensor's dropout of up to 0.5 s is\n"
+    "bridged (its segment slerped across the gap).\n"
     "A damaged session is read around the damage: every intact block is exported and each\n"
     "damaged range is reported (bytes, time span).\n"
     "Exit status: 0 exported (a torn tail after a crash is reported, not an error); 1 error;\n"
@@ -118,6 +119,8 @@ class FinishedPoses {
     PoseFrame f;
     const auto drain = [&] {
       while (bridge_.next(f)) {
+        if (t_first_ns_ < 0) t_first_ns_ = f.t_ns;
+        t_last_ns_ = f.t_ns;
         if (!resampler_) {
           emit(f);
           continue;
@@ -137,10 +140,15 @@ class FinishedPoses {
     drain();
   }
   long bridged() const { return bridge_.bridged(); }
+  /// Time from the first to the last pose of the session, seconds.
+  double duration_s() const {
+    return t_last_ns_ > t_first_ns_ ? (t_last_ns_ - t_first_ns_) * 1e-9 : 0;
+  }
 
  private:
   DropoutBridge bridge_;
   std::optional<PoseResampler> resampler_;
+  int64_t t_first_ns_ = -1, t_last_ns_ = -1;
 };
 
 bool write_csv_row(std::FILE* f, double t, int s, const PoseFrame& p) {
@@ -208,55 +216,65 @@ int export_poses(SessionReader& r, const std::string& in, const std::string& out
     std::fprintf(stderr, "mocap export: %s holds no poses\n", in.c_str());
     return 1;
   }
-  std::fprintf(stderr, "mocap export: %ld frames", frames);
-  if (rate_hz > 0) std::fprintf(stderr, " at %.6g Hz", rate_hz);
-  std::fprintf(stderr, " (body height %.2f m; %ld segment-frames bridged across dropouts) -> %s\n",
-               body.dimensions().height_m, poses.bridged(), out.c_str());
+  nlohmann::json extra = {{"body_height_m", std::round(body.dimensions().height_m * 100) / 100},
+                          {"bridged_segment_frames", poses.bridged()},
+                          {"damaged_ranges", r.damaged().size()}};
+  if (rate_hz > 0) extra["rate_hz"] = rate_hz;
+  print_run_summary("export", in, {out}, frames, poses.duration_s(), extra);
   return damaged ? kExitDamaged : 0;
 }
 
 }  // namespace
 
-int run_export(int argc, char** argv) {
-  CliArgs args;
-  args.option("csv", "write the poses as CSV to this file")
-      .option("bvh", "write the poses as BVH to this file")
-      .option("gltf", "write the poses as binary glTF (.glb) to this file")
-      .option("opensim", "write an OpenSense orientations table (.sto) to this file")
-      .option("rate", "resample to this frame rate, Hz (BVH default: the recorded pipeline rate)")
-      .flag("help", "show this help");
-  if (!args.parse(argc, argv, 1)) {
-    std::fprintf(stderr, "mocap export: %s\n%s", args.error().c_str(), kExportUsage);
-    return 2;
-  }
-  if (args.has("help")) {
-    std::printf("%s%s", kExportUsage, args.help().c_str());
-    return 0;
-  }
-  const int outputs = int(args.has("csv")) + int(args.has("bvh")) + int(args.has("gltf")) +
-                      int(args.has("opensim"));
-  if (args.positional().size() != 1 || outputs != 1) {
-    std::fprintf(stderr, "%s", kExportUsage);
-    return 2;
-  }
-  const std::string in = args.positional()[0];
-  SessionReader reader;
-  std::string error;
-  if (!reader.open(in, &error)) {
-    std::fprintf(stderr, "mocap export: %s\n", error.c_str());
-    return 1;
-  }
-  double rate_hz = 0;
-  if (args.has("rate") &&
-      (!args.get_double("rate", rate_hz) || !(rate_hz > 0 && rate_hz <= 10000))) {
-    std::fprintf(stderr, "mocap export: --rate must be in (0, 10000] Hz\n");
-    return 2;
-  }
-  if (args.has("csv")) return export_poses(reader, in, *args.get("csv"), Format::csv, rate_hz);
-  if (args.has("gltf")) return export_poses(reader, in, *args.get("gltf"), Format::gltf, rate_hz);
-  if (args.has("opensim"))
-    return export_poses(reader, in, *args.get("opensim"), Format::opensim, rate_hz);
-  return export_poses(reader, in, *args.get("bvh"), Format::bvh, rate_hz);
+void add_export(CLI::App& app, int& exit_code) {
+  struct ExportOptions {
+    std::string input, csv, bvh, gltf, opensim;
+    double rate_hz = 0;
+  };
+  auto o = std::make_shared<ExportOptions>();
+  CLI::App* c =
+      cli::add_command(app, "export", "convert a recorded session to CSV, BVH, glTF or OpenSim");
+  c->footer(kExportUsage);
+  c->add_option("SESSION", o->input, "the recorded session (.mcap)")->required();
+  CLI::Option* outs[] = {
+      c->add_option("--csv", o->csv, "write the poses as CSV to this file (one output per run)"),
+      c->add_option("--bvh", o->bvh, "write the poses as BVH to this file (one output per run)"),
+      c->add_option("--gltf", o->gltf,
+                    "write the poses as binary glTF (.glb) to this file (one output per run)"),
+      c->add_option(
+          "--opensim", o->opensim,
+          "write an OpenSense orientations table (.sto) to this file (one output per run)")};
+  // One output per run: each writer reads the session once.
+  for (CLI::Option* a : outs)
+    for (CLI::Option* b : outs)
+      if (a != b) a->excludes(b);
+  CLI::Option* rate =
+      c->add_option("--frame-rate", o->rate_hz,
+                    "resample to this frame rate, Hz (default: CSV as recorded, the others at the "
+                    "recorded pipeline rate)")
+          ->check(CLI::Range(1e-9, 10000.0))
+          ->default_str("");
+  // --rate means a sensor's sample rate elsewhere (perform, simulate, bench).
+  cli::add_deprecated_alias(*c, "--rate", o->rate_hz, rate)->check(CLI::Range(1e-9, 10000.0));
+  c->callback([o, &exit_code] {
+    if (o->csv.empty() && o->bvh.empty() && o->gltf.empty() && o->opensim.empty()) {
+      std::fprintf(stderr, "mocap export: give one output: --csv, --bvh, --gltf or --opensim\n");
+      exit_code = 2;
+      return;
+    }
+    SessionReader reader;
+    std::string error;
+    if (!reader.open(o->input, &error)) {
+      std::fprintf(stderr, "mocap export: %s\n", error.c_str());
+      exit_code = 1;
+      return;
+    }
+    const auto [out, format] = !o->csv.empty()       ? std::pair{o->csv, Format::csv}
+                               : !o->gltf.empty()    ? std::pair{o->gltf, Format::gltf}
+                               : !o->opensim.empty() ? std::pair{o->opensim, Format::opensim}
+                                                     : std::pair{o->bvh, Format::bvh};
+    exit_code = export_poses(reader, o->input, out, format, o->rate_hz);
+  });
 }
 
 }  // namespace mocap::cmd

@@ -4,11 +4,12 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/daemon/sample_csv.hpp"
 #include "mocap/filter/gyro_scale.hpp"
 #include "mocap/session/session_reader.hpp"
@@ -18,8 +19,6 @@ namespace mocap::cmd {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: mocap gyro-scale RECORDING (a session file, or an interchange CSV\n"
-    "       t,sensor,gyr_x..mag_z)\n"
     "A consumer gyro's scale is off by ~0.5 % per axis, which turns every sensor's heading by a\n"
     "different degree or two in each half turn of the body. Measure it once per sensor: record\n"
     "(`mocapctl record start spins.mcap`) while each sensor lies on a table with one axis up,\n"
@@ -81,18 +80,7 @@ bool read_csv(const std::string& path, Recording& rec, std::string& error) {
   return true;
 }
 
-}  // namespace
-
-int run_gyro_scale(int argc, char** argv) {
-  CliArgs args;
-  args.flag("help", "show this help");
-  if (!args.parse(argc, argv) || args.positional().size() != 1 || args.has("help")) {
-    std::fprintf(args.has("help") ? stdout : stderr, "%s%s%s",
-                 args.error().empty() ? "" : ("mocap gyro-scale: " + args.error() + "\n").c_str(),
-                 kUsage, args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  const std::string path = args.positional().front();
+int run_gyro_scale(const std::string& path) {
   Recording rec;
   std::string error;
   if (!(is_session(path) ? read_session(path, rec, error) : read_csv(path, rec, error))) {
@@ -127,6 +115,18 @@ int run_gyro_scale(int argc, char** argv) {
                 r.axis[2].scale);
   }
   return missing ? 1 : 0;
+}
+
+}  // namespace
+
+void add_gyro_scale(CLI::App& app, int& exit_code) {
+  auto path = std::make_shared<std::string>();
+  CLI::App* c = cli::add_command(
+      app, "gyro-scale", "each sensor's gyro scale from table spins (a one-time calibration)");
+  c->footer(kUsage);
+  c->add_option("RECORDING", *path, "a session file, or an interchange CSV t,sensor,gyr_x..mag_z")
+      ->required();
+  c->callback([path, &exit_code] { exit_code = run_gyro_scale(*path); });
 }
 
 }  // namespace mocap::cmd

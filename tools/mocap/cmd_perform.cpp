@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/sim/csv_writers.hpp"
 #include "mocap/sim/performer.hpp"
 #include "mocap/sim/sensor_model.hpp"
@@ -20,79 +20,39 @@ namespace mocap::cmd {
 
 namespace {
 
-constexpr const char* kPerformUsage =
-    "usage: mocap perform [--motion NAME|FILE.bvh] [--seed N] [--rate HZ] [--height M]\n"
-    "                     [--disturbance none|magnet|desk|both] [--ideal] [--duration S]\n"
-    "                     [--samples OUT.csv] [--truth OUT.csv] [--bvh OUT.bvh [--bvh-rate HZ]]\n"
-    "  At least one output. The motion plays once (default: its whole length).\n";
-
-}  // namespace
-
-int run_perform(int argc, char** argv) {
-  CliArgs args;
-  args.option("motion", "a motion name (sim::motion_names(), optionally calibrate+) or a BVH file")
-      .option("seed", "random seed of the sensor errors and mountings (default 1)")
-      .option("rate", "sensor sample rate, Hz (default 100)")
-      .option("height", "performer height, m (default 1.75; a BVH file brings its own bones)")
-      .option("disturbance", "magnetic disturbance: none|magnet|desk|both (default none)")
-      .flag("ideal", "ideal sensors (no noise, bias, scale error, misalignment)")
-      .option("duration", "seconds to perform (default: the motion's length)")
-      .option("samples", "write the sensors' samples here (interchange IMU CSV)")
-      .option("truth", "write the ground-truth poses here (t,segment,w,x,y,z,px,py,pz)")
-      .option("bvh", "write the ground truth here as BVH")
-      .option("bvh-rate", "BVH frame rate, Hz (default 60)")
-      .flag("help", "show this help");
-  if (!args.parse(argc, argv)) {
-    std::fprintf(stderr, "mocap perform: %s\n%s", args.error().c_str(), kPerformUsage);
-    return 2;
-  }
-  if (args.has("help")) {
-    std::printf("%s%s", kPerformUsage, args.help().c_str());
-    return 0;
-  }
+/// mocap perform's command line (declared in add_perform).
+struct PerformOptions {
   sim::PerformerParams pp;
-  pp.motion = args.get_or("motion", "sequence");
-  pp.loop = false;
   long seed = 1;
+  bool ideal = false;
   double duration_s = -1, bvh_rate_hz = 60;
-  if ((args.has("seed") && (!args.get_int("seed", seed) || seed < 0)) ||
-      (args.has("rate") && !args.get_double("rate", pp.rate_hz)) ||
-      (args.has("height") && !args.get_double("height", pp.height_m)) ||
-      (args.has("duration") && !args.get_double("duration", duration_s)) ||
-      (args.has("bvh-rate") && !args.get_double("bvh-rate", bvh_rate_hz))) {
-    std::fprintf(stderr, "mocap perform: %s\n",
-                 args.error().empty() ? "--seed must be >= 0" : args.error().c_str());
-    return 2;
-  }
-  if (!(bvh_rate_hz >= 1 && bvh_rate_hz <= 1000)) {
-    std::fprintf(stderr, "mocap perform: --bvh-rate must be in [1, 1000] Hz\n");
-    return 2;
-  }
-  if (!args.has("samples") && !args.has("truth") && !args.has("bvh")) {
-    std::fprintf(stderr, "mocap perform: nothing to write (--samples, --truth or --bvh)\n%s",
-                 kPerformUsage);
-    return 2;
-  }
+  std::string disturbance = "none", samples, truth, bvh;
+};
+
+int run_perform(PerformOptions& o) {
+  sim::PerformerParams& pp = o.pp;
+  const long seed = o.seed;
+  const double duration_s = o.duration_s, bvh_rate_hz = o.bvh_rate_hz;
   pp.seed = static_cast<uint64_t>(seed);
-  if (args.has("ideal")) pp.sensor = sim::SensorModelParams::ideal();
+  if (o.ideal) pp.sensor = sim::SensorModelParams::ideal();
   try {
-    pp.field.dipoles = sim::disturbance_preset(args.get_or("disturbance", "none"), pp.height_m);
+    pp.field.dipoles = sim::disturbance_preset(o.disturbance, pp.height_m);
     sim::Performer perf(pp);
     const double end_s = duration_s >= 0 ? duration_s : perf.track().period_s();
     std::unique_ptr<sim::ImuCsvWriter> samples_csv;
     std::unique_ptr<sim::TruthCsvWriter> truth_csv;
     std::unique_ptr<BvhWriter> bvh;
-    if (auto p = args.get("samples")) {
+    if (!o.samples.empty()) {
       std::vector<std::string> names;
       for (int i = 0; i < sim::Performer::kSensorCount; ++i)
         names.emplace_back(sim::Performer::sensor_name(i));
-      samples_csv = std::make_unique<sim::ImuCsvWriter>(*p, names, pp.t0_ns);
+      samples_csv = std::make_unique<sim::ImuCsvWriter>(o.samples, names, pp.t0_ns);
     }
-    if (auto p = args.get("truth")) truth_csv = std::make_unique<sim::TruthCsvWriter>(*p);
-    if (auto p = args.get("bvh")) {
-      BvhWriterOptions o;
-      o.frame_time_s = 1.0 / bvh_rate_hz;
-      bvh = std::make_unique<BvhWriter>(*p, BodyModel(perf.dims()), o);
+    if (!o.truth.empty()) truth_csv = std::make_unique<sim::TruthCsvWriter>(o.truth);
+    if (!o.bvh.empty()) {
+      BvhWriterOptions bo;
+      bo.frame_time_s = 1.0 / bvh_rate_hz;
+      bvh = std::make_unique<BvhWriter>(o.bvh, BodyModel(perf.dims()), bo);
     }
     // Truth and BVH frames on their own grids; samples as the performer emits them.
     const double truth_period_s = 1.0 / pp.rate_hz, bvh_period_s = 1.0 / bvh_rate_hz;
@@ -126,13 +86,52 @@ int run_perform(int argc, char** argv) {
                  "mocap perform: %s, %.2f s: %ld samples, %ld truth frames%s%s (calibration "
                  "stand %.1f..%.1f s)\n",
                  pp.motion.c_str(), end_s, n_samples, n_truth, bvh ? ", BVH " : "",
-                 bvh ? args.get("bvh")->c_str() : "", perf.calibration_window_s().first,
+                 bvh ? o.bvh.c_str() : "", perf.calibration_window_s().first,
                  perf.calibration_window_s().second);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mocap perform: %s\n", e.what());
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+void add_perform(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<PerformOptions>();
+  o->pp.motion = "sequence";
+  o->pp.loop = false;
+  CLI::App* c = cli::add_command(
+      app, "perform", "run the virtual performer: its samples, ground truth and BVH to files");
+  c->footer("At least one output. The motion plays once (default: its whole length).");
+  c->add_option("--motion", o->pp.motion,
+                "a motion name (sim::motion_names(), optionally calibrate+) or a BVH file");
+  c->add_option("--seed", o->seed, "random seed of the sensor errors and mountings")
+      ->check(CLI::NonNegativeNumber);
+  c->add_option("--rate", o->pp.rate_hz, "sensor sample rate, Hz")->check(CLI::PositiveNumber);
+  c->add_option("--body-height,--height", o->pp.height_m,
+                "performer height, m (a BVH file brings its own bones)")
+      ->check(CLI::Range(0.5, 2.6));
+  c->add_option("--disturbance", o->disturbance, "magnetic disturbance: none|magnet|desk|both");
+  c->add_flag("--ideal", o->ideal, "ideal sensors (no noise, bias, scale error, misalignment)");
+  c->add_option("--duration", o->duration_s, "seconds to perform (default: the motion's length)")
+      ->default_str("");
+  CLI::Option* samples = c->add_option("--samples", o->samples,
+                                       "write the sensors' samples here (interchange IMU CSV)");
+  CLI::Option* truth = c->add_option(
+      "--truth", o->truth, "write the ground-truth poses here (t,segment,w,x,y,z,px,py,pz)");
+  CLI::Option* bvh = c->add_option("--bvh", o->bvh, "write the ground truth here as BVH");
+  c->add_option("--bvh-rate", o->bvh_rate_hz, "frame rate of the --bvh file, Hz")
+      ->check(CLI::Range(1.0, 1000.0))
+      ->needs(bvh);
+  c->callback([o, &exit_code, samples, truth, bvh] {
+    if (!samples->count() && !truth->count() && !bvh->count()) {
+      std::fprintf(stderr, "mocap perform: nothing to write (--samples, --truth or --bvh)\n");
+      exit_code = 2;
+      return;
+    }
+    exit_code = run_perform(*o);
+  });
 }
 
 }  // namespace mocap::cmd

@@ -1,15 +1,16 @@
 // mocap replay: runs a recorded session or a CSV of samples offline through the daemon's
 // pipeline (filter -> calibration -> skeleton) and writes BVH and/or pose CSV.
-//   mocap replay INPUT [--rig RIG.toml] [--set K=V] [--bvh OUT.bvh] [--poses OUT.csv]
+//   mocap replay INPUT [--config RIG.toml] [--set K=V] [--bvh OUT.bvh] [--csv OUT.csv]
 //                [--calibrate npose@SECONDS|tpose@SECONDS] [--source raw|samples]
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/poses_csv.hpp"
@@ -19,6 +20,7 @@
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
 #include "mocap/skeleton/dropout_bridge.hpp"
+#include "run_summary.hpp"
 
 namespace mocap::cmd {
 
@@ -71,68 +73,45 @@ bool parse_calibrate(const std::string& s, mocap::CalibrationPose& pose, double&
   return end && *end == '\0' && at + 1 < s.size() && at_s >= 0;
 }
 
-}  // namespace
+/// mocap replay's command line (declared in add_replay).
+struct ReplayCommandOptions {
+  std::string input, config, config_alias, bvh, csv, csv_alias, calibrate, source;
+  std::vector<std::string> sets;
+  bool quiet = false;
+};
 
-int run_replay(int argc, char** argv) {
-  CliArgs args;
-  args.flag("help", "show this help")
-      .option("rig",
-              "rig configuration (TOML); default: the recorded one, or segment-named sensors")
-      .multi("set", "override a configuration key (KEY=VALUE)")
-      .option("bvh", "write the motion as BVH")
-      .option("poses", "write poses as CSV: t,segment,w,x,y,z,px,py,pz")
-      .option("calibrate", "calibrate at a moment of the input: npose@SECONDS or tpose@SECONDS")
-      .option("source", "session files: replay 'raw' device bytes or recorded 'samples'")
-      .flag("quiet", "no progress bar");
-  if (!args.parse(argc, argv) || args.has("help") || args.positional().size() != 1) {
-    if (!args.error().empty()) std::fprintf(stderr, "mocap replay: %s\n", args.error().c_str());
-    std::fprintf(args.has("help") ? stdout : stderr,
-                 "usage: mocap replay INPUT(.mcap session | .csv samples) [options]\n%s",
-                 args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  const std::string input = args.positional()[0];
+int run_replay(const ReplayCommandOptions& o) {
+  const std::string& input = o.input;
+  const std::string rig_path = o.config.empty() ? o.config_alias : o.config;
+  const std::string csv_path = o.csv.empty() ? o.csv_alias : o.csv;
   std::optional<Config> rig;
-  const auto sets = args.get_all("set");
-  if (auto r = args.get("rig")) {
+  const auto& sets = o.sets;
+  if (!rig_path.empty()) {
     ConfigErrors errs;
-    rig = load_config(*r, sets, errs, &default_validators());
+    rig = load_config(rig_path, sets, errs, &default_validators());
     if (!rig) {
       std::fprintf(stderr, "%s", errs.to_string().c_str());
       return 1;
     }
   }
   ReplayOptions opt;
-  if (auto c = args.get("calibrate")) {
+  if (!o.calibrate.empty()) {
     mocap::CalibrationPose pose;
-    if (!parse_calibrate(*c, pose, opt.calibrate_at_s)) {
-      std::fprintf(stderr,
-                   "mocap replay: --calibrate needs npose@SECONDS or tpose@SECONDS, got '%s'\n",
-                   c->c_str());
-      return 2;
-    }
+    parse_calibrate(o.calibrate, pose, opt.calibrate_at_s);  // checked by the option
     opt.calibrate_pose = pose;
   }
-  SessionSource which = SessionSource::automatic;
-  if (auto s = args.get("source")) {
-    if (*s == "raw")
-      which = SessionSource::raw;
-    else if (*s == "samples")
-      which = SessionSource::samples;
-    else {
-      std::fprintf(stderr, "mocap replay: --source is raw or samples\n");
-      return 2;
-    }
-  }
+  const SessionSource which = o.source == "raw"       ? SessionSource::raw
+                              : o.source == "samples" ? SessionSource::samples
+                                                      : SessionSource::automatic;
   try {
     std::unique_ptr<SampleSource> src;
-    if (args.has("source"))
+    if (!o.source.empty())
       src = open_session_source(input, rig ? &*rig : nullptr, which);
     else
       src = open_sample_source(input, rig ? &*rig : nullptr);
     // Read and decode the file on the other core while this one filters and solves.
     src = std::make_unique<PrefetchSource>(std::move(src));
-    // --set without --rig: applied to the input's own configuration.
+    // --set without --config: applied to the input's own configuration.
     ReplayRun run(replay_config(*src, rig.has_value(), sets, input), *src, input,
                   !opt.calibrate_pose);
     const Config& cfg = run.cfg;
@@ -140,15 +119,15 @@ int run_replay(int argc, char** argv) {
     PipelineCore& core = run.core;
     std::unique_ptr<BvhSink> bvh;
     std::unique_ptr<PosesCsvSink> poses;
-    if (auto p = args.get("bvh")) {
-      bvh = std::make_unique<BvhSink>(*p, cfg);
+    if (!o.bvh.empty()) {
+      bvh = std::make_unique<BvhSink>(o.bvh, cfg);
       core.add_sink(bvh.get());
     }
-    if (auto p = args.get("poses")) {
-      poses = std::make_unique<PosesCsvSink>(*p, 0);
+    if (!csv_path.empty()) {
+      poses = std::make_unique<PosesCsvSink>(csv_path, 0);
       core.add_sink(poses.get());
     }
-    const bool bar = !args.has("quiet") && isatty(STDERR_FILENO);
+    const bool bar = !o.quiet && isatty(STDERR_FILENO);
     if (bar) {
       opt.progress = [](double f) {
         const int w = 40, n = static_cast<int>(f * w);
@@ -166,12 +145,23 @@ int run_replay(int argc, char** argv) {
     if (bvh) bvh->close();
     if (poses) poses->close();
     const double wall_s = (monotonic_ns() - wall0) * 1e-9;
-    std::printf(
-        "{\"input\":\"%s\",\"sensors\":%zu,\"samples\":%llu,\"frames\":%llu,"
-        "\"duration_s\":%.3f,\"wall_s\":%.3f,\"calibration\":\"%s\"}\n",
-        input.c_str(), cfg.sensors.size(), static_cast<unsigned long long>(r.samples),
-        static_cast<unsigned long long>(r.frames), (r.t_last_ns - r.t_first_ns) * 1e-9, wall_s,
-        engine.last_calibration_message().c_str());
+    const bool calibrated = engine.skeleton().calibration().valid;
+    std::vector<std::string> outputs;
+    if (!o.bvh.empty()) outputs.push_back(o.bvh);
+    if (!csv_path.empty()) outputs.push_back(csv_path);
+    print_run_summary("replay", input, outputs, static_cast<long long>(r.frames),
+                      (r.t_last_ns - r.t_first_ns) * 1e-9,
+                      {{"sensors", cfg.sensors.size()},
+                       {"samples", r.samples},
+                       {"wall_s", std::round(wall_s * 1000) / 1000},
+                       {"calibrated", calibrated},
+                       {"calibration", engine.last_calibration_message()}});
+    if (!calibrated && !opt.calibrate_pose)
+      std::fprintf(stderr,
+                   "mocap replay: warning: %s holds no calibration and none was asked for: the "
+                   "poses are the sensors' own orientations, not the body's (calibrate with "
+                   "--calibrate npose@SECONDS at a moment the person stands in the pose)\n",
+                   input.c_str());
     if (opt.calibrate_pose && !engine.skeleton().calibration().valid) {
       std::fprintf(stderr, "mocap replay: calibration at %.2f s failed: %s\n", opt.calibrate_at_s,
                    engine.last_calibration_message().empty()
@@ -184,6 +174,41 @@ int run_replay(int argc, char** argv) {
     std::fprintf(stderr, "mocap replay: %s\n", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+void add_replay(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<ReplayCommandOptions>();
+  CLI::App* c =
+      cli::add_command(app, "replay", "run a session or sample CSV through the pipeline offline");
+  c->add_option("INPUT", o->input, "a session (.mcap) or a CSV of samples")->required();
+  CLI::Option* config = c->add_option(
+      "--config", o->config,
+      "rig configuration (TOML); default: the recorded one, or segment-named sensors");
+  cli::add_deprecated_alias(*c, "--rig", o->config_alias, config);
+  cli::add_multi(*c, "--set", o->sets, "override a configuration key (KEY=VALUE)");
+  c->add_option("--bvh", o->bvh, "write the motion as BVH");
+  CLI::Option* csv =
+      c->add_option("--csv", o->csv, "write the poses as CSV: t,segment,w,x,y,z,px,py,pz");
+  cli::add_deprecated_alias(*c, "--poses", o->csv_alias, csv);
+  c->add_option("--calibrate", o->calibrate,
+                "calibrate at a moment of the input: npose@SECONDS or tpose@SECONDS")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            mocap::CalibrationPose pose;
+            double at_s = 0;
+            return parse_calibrate(v, pose, at_s)
+                       ? std::string()
+                       : "needs npose@SECONDS or tpose@SECONDS, got '" + v + "'";
+          },
+          "POSE@SECONDS"));
+  c->add_option("--source", o->source,
+                "session files: replay 'raw' device bytes or recorded 'samples' (default: "
+                "samples if recorded)")
+      ->check(CLI::IsMember({"raw", "samples"}));
+  c->add_flag("--quiet", o->quiet, "no progress bar");
+  c->callback([o, &exit_code] { exit_code = run_replay(*o); });
 }
 
 }  // namespace mocap::cmd

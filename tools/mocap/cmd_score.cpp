@@ -1,5 +1,5 @@
 // mocap score: the full-body metric of ../shared/datasets/cmu/README.md for a pose CSV (from
-// `mocap replay --poses` or `mocap export --csv`) against a truth CSV (`mocap perform --truth`):
+// `mocap replay --csv` or `mocap export --csv`) against a truth CSV (`mocap perform --truth`):
 // each pose frame is paired with the truth frame at its time, scoring starts at --from seconds
 // (the reference instant, just after calibration), and every segment present in both files
 // with a sensor-like motion is scored (--segments to choose). Prints JSON.
@@ -7,13 +7,14 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/core/segments.hpp"
 #include "mocap/sim/segment_metric.hpp"
 
@@ -21,8 +22,7 @@ namespace mocap::cmd {
 namespace {
 
 constexpr const char* kScoreUsage =
-    "usage: mocap score POSES.csv TRUTH.csv [--from SECONDS] [--segments LIST]\n"
-    "  Both files: t,segment,w,x,y,z[,px,py,pz] (replay --poses, export --csv, perform --truth).\n";
+    "Both files: t,segment,w,x,y,z[,px,py,pz] (replay --csv, export --csv, perform --truth).";
 
 /// Frames keyed by time in ns: each holds the orientations of the segments seen at that time.
 struct ScoreFrames {
@@ -73,29 +73,17 @@ bool read_score_frames(const std::string& path, ScoreFrames& out, std::string& e
   return true;
 }
 
-}  // namespace
+/// mocap score's command line (declared in add_score).
+struct ScoreOptions {
+  std::string poses, truth, segments;
+  double from_s = -1e300;  ///< default: the pose file's first frame
+};
 
-int run_score(int argc, char** argv) {
-  CliArgs args;
-  args.flag("help", "show this help")
-      .option("from", "reference instant, seconds of the pose file (default: its first frame)")
-      .option("segments",
-              "comma list of segments to score (default: the 15 segments with standard sensor "
-              "sites, all but the neck)");
-  if (!args.parse(argc, argv) || args.positional().size() != 2 || args.has("help")) {
-    std::fprintf(args.has("help") ? stdout : stderr, "%s%s%s",
-                 args.error().empty() ? "" : ("mocap score: " + args.error() + "\n").c_str(),
-                 kScoreUsage, args.help().c_str());
-    return args.has("help") ? 0 : 2;
-  }
-  double from_s = -1e300;
-  if (!args.get_double("from", from_s)) {
-    std::fprintf(stderr, "mocap score: %s\n", args.error().c_str());
-    return 2;
-  }
+int run_score(const ScoreOptions& o) {
+  const double from_s = o.from_s;
   std::array<bool, kSegmentCount> scored{};
-  if (auto list = args.get("segments")) {
-    std::stringstream ss(*list);
+  if (!o.segments.empty()) {
+    std::stringstream ss(o.segments);
     std::string name;
     while (std::getline(ss, name, ',')) {
       const auto seg = segment_from_name(name);
@@ -111,8 +99,7 @@ int run_score(int argc, char** argv) {
   }
   ScoreFrames poses, truth;
   std::string error;
-  if (!read_score_frames(args.positional()[0], poses, error) ||
-      !read_score_frames(args.positional()[1], truth, error)) {
+  if (!read_score_frames(o.poses, poses, error) || !read_score_frames(o.truth, truth, error)) {
     std::fprintf(stderr, "mocap score: %s\n", error.c_str());
     return 1;
   }
@@ -151,6 +138,24 @@ int run_score(int argc, char** argv) {
     if (scored[s]) j["segment_error_deg"][std::string(kSegmentNames[s])] = r.segment_rms_deg[s];
   std::printf("%s\n", j.dump(2).c_str());
   return 0;
+}
+
+}  // namespace
+
+void add_score(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<ScoreOptions>();
+  CLI::App* c = cli::add_command(
+      app, "score", "full-body metric of a pose CSV against a truth CSV (datasets/cmu/README.md)");
+  c->footer(kScoreUsage);
+  c->add_option("POSES", o->poses, "pose CSV (replay --csv, export --csv)")->required();
+  c->add_option("TRUTH", o->truth, "truth CSV (perform --truth)")->required();
+  c->add_option("--from", o->from_s,
+                "reference instant, seconds of the pose file (default: its first frame)")
+      ->default_str("");
+  c->add_option("--segments", o->segments,
+                "comma list of segments to score (default: the 15 segments with standard sensor "
+                "sites, all but the neck)");
+  c->callback([o, &exit_code] { exit_code = run_score(*o); });
 }
 
 }  // namespace mocap::cmd

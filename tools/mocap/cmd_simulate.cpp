@@ -5,10 +5,11 @@
 
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <string>
 
 #include "commands.hpp"
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/devsim/sim_device.hpp"
 
 namespace mocap::cmd {
@@ -16,9 +17,6 @@ namespace mocap::cmd {
 namespace {
 
 constexpr const char* kSimulateUsage =
-    "usage: mocap simulate --protocol witmotion|xbus|ds4|dualsense|joycon|line\n"
-    "                      (--pty [--link PATH] | --udp HOST:PORT | --out FILE --samples N)\n"
-    "                      [--motion static|rotate|FILE.csv] [--rate HZ] [--option KEY=VALUE]...\n"
     "  --pty prints the slave path (\"pty: /dev/pts/N\") and runs until interrupted.\n"
     "  --out writes a capture: the byte stream, or for HID protocols each report prefixed by\n"
     "  one length byte (the format the fuzz corpora and report-byte tests use).\n";
@@ -76,61 +74,23 @@ int write_capture(const std::string& protocol, const std::string& motion_spec, d
   return 0;
 }
 
-}  // namespace
+/// mocap simulate's command line (declared in add_simulate).
+struct SimulateOptions {
+  SimOptions sim;
+  bool pty = false;
+  std::string out;
+  long samples = 1000;
+  double duration_s = 0;
+  std::vector<std::string> options;
+};
 
-int run_simulate(int argc, char** argv) {
-  CliArgs args;
-  args.option("protocol", "witmotion|xbus|ds4|dualsense|joycon|line")
-      .flag("pty", "emit on a new pseudo-terminal")
-      .option("link", "with --pty: also make a stable symlink at PATH")
-      .option("udp", "send datagrams to HOST:PORT")
-      .option("out", "write a capture file")
-      .option("samples", "number of samples (--out; default 1000)")
-      .option("motion", "static|rotate|FILE.csv (default rotate)")
-      .option("rate", "output rate in Hz (default 100)")
-      .option("duration", "stop after this many seconds (default: until interrupted)")
-      .multi("option", "protocol option KEY=VALUE (e.g. quat_order=xyzw)")
-      .flag("help", "show this help");
-  if (!args.parse(argc, argv)) {
-    std::fprintf(stderr, "mocap simulate: %s\n%s", args.error().c_str(), kSimulateUsage);
-    return 2;
-  }
-  if (args.has("help")) {
-    std::printf("%s%s", kSimulateUsage, args.help().c_str());
-    return 0;
-  }
-  SimOptions so;
-  so.protocol = args.get_or("protocol", "");
-  so.motion = args.get_or("motion", "rotate");
-  double duration = 0;
-  if (so.protocol.empty()) {
-    std::fprintf(stderr, "mocap simulate: --protocol is required\n%s", kSimulateUsage);
-    return 2;
-  }
-  if ((args.has("rate") && !args.get_double("rate", so.rate_hz)) ||
-      (args.has("duration") && !args.get_double("duration", duration)) ||
-      !parse_kv(args.get_all("option"), so.options)) {
-    std::fprintf(stderr, "mocap simulate: %s\n", args.error().c_str());
-    return 2;
-  }
-  const int modes = args.has("pty") + args.has("udp") + args.has("out");
-  if (modes != 1) {
-    std::fprintf(stderr, "mocap simulate: give exactly one of --pty, --udp, --out\n%s",
-                 kSimulateUsage);
-    return 2;
-  }
+int run_simulate(SimulateOptions& o) {
+  SimOptions& so = o.sim;
+  const double duration = o.duration_s;
+  if (!parse_kv(o.options, so.options)) return 2;
   try {
-    if (args.has("out")) {
-      long samples = 1000;
-      if (args.has("samples") && (!args.get_int("samples", samples) || samples < 1)) {
-        std::fprintf(stderr, "mocap simulate: --samples must be a positive integer\n");
-        return 2;
-      }
-      return write_capture(so.protocol, so.motion, so.rate_hz, so.options, samples,
-                           *args.get("out"));
-    }
-    so.udp = args.get_or("udp", "");
-    so.pty_link = args.get_or("link", "");
+    if (!o.out.empty())
+      return write_capture(so.protocol, so.motion, so.rate_hz, so.options, o.samples, o.out);
     // Block the stop signals before threads start, then wait for them synchronously.
     sigset_t stop_signals;
     sigemptyset(&stop_signals);
@@ -159,6 +119,45 @@ int run_simulate(int argc, char** argv) {
     std::fprintf(stderr, "mocap simulate: %s\n", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+void add_simulate(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<SimulateOptions>();
+  o->sim.motion = "rotate";
+  CLI::App* c = cli::add_command(app, "simulate",
+                                 "emulate a device: protocol bytes on a pty, as UDP or to a file");
+  c->footer(kSimulateUsage);
+  c->add_option("--protocol", o->sim.protocol, "witmotion|xbus|ds4|dualsense|joycon|line")
+      ->required();
+  CLI::Option* pty = c->add_flag(
+      "--pty", o->pty, "emit on a new pseudo-terminal (one destination: --pty, --udp or --out)");
+  c->add_option("--link", o->sim.pty_link, "also make a stable symlink at PATH to the --pty")
+      ->needs(pty);
+  CLI::Option* udp = c->add_option(
+      "--udp", o->sim.udp, "send datagrams to HOST:PORT (one destination: --pty, --udp or --out)");
+  CLI::Option* out = c->add_option("--out", o->out,
+                                   "write a capture file (one destination: --pty, --udp or --out)");
+  // One destination: the bytes go to a pty, to UDP or into a file.
+  pty->excludes(udp)->excludes(out);
+  udp->excludes(out);
+  c->add_option("--samples", o->samples, "number of samples written to the --out file")
+      ->check(CLI::PositiveNumber)
+      ->needs(out);
+  c->add_option("--motion", o->sim.motion, "static|rotate|FILE.csv");
+  c->add_option("--rate", o->sim.rate_hz, "output rate, Hz")->check(CLI::PositiveNumber);
+  c->add_option("--duration", o->duration_s, "stop after this many seconds (0: until interrupted)")
+      ->check(CLI::NonNegativeNumber);
+  cli::add_multi(*c, "--option", o->options, "protocol option KEY=VALUE (e.g. quat_order=xyzw)");
+  c->callback([o, &exit_code] {
+    if (!o->pty && o->sim.udp.empty() && o->out.empty()) {
+      std::fprintf(stderr, "mocap simulate: give one of --pty, --udp, --out\n%s", kSimulateUsage);
+      exit_code = 2;
+      return;
+    }
+    exit_code = run_simulate(*o);
+  });
 }
 
 }  // namespace mocap::cmd

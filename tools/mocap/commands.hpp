@@ -1,18 +1,21 @@
-// The mocap tool's subcommands. Each is `int run_<name>(int argc, char** argv)` in cmd_<name>.cpp,
-// where argv[0] is the subcommand name; returns the process exit code (0 ok, 1 failure, 2 usage).
+// The mocap tool's subcommands. Each cmd_<name>.cpp declares its subcommand and every option of
+// it in `add_<name>(app, exit_code)` (one Options struct per command, filled by CLI11); the
+// subcommand's callback runs it and stores the process exit code (0 ok, 1 failure, 2 usage).
 #pragma once
+
+#include <CLI/CLI.hpp>
 
 namespace mocap::cmd {
 
-int run_filter(int argc, char** argv);
-int run_simulate(int argc, char** argv);
-int run_perform(int argc, char** argv);
-int run_replay(int argc, char** argv);
-int run_export(int argc, char** argv);
-int run_devices(int argc, char** argv);
-int run_bench(int argc, char** argv);
-int run_evaluate(int argc, char** argv);
-int run_gyro_scale(int argc, char** argv);
-int run_score(int argc, char** argv);
+void add_filter(CLI::App& app, int& exit_code);
+void add_simulate(CLI::App& app, int& exit_code);
+void add_perform(CLI::App& app, int& exit_code);
+void add_replay(CLI::App& app, int& exit_code);
+void add_export(CLI::App& app, int& exit_code);
+void add_devices(CLI::App& app, int& exit_code);
+void add_bench(CLI::App& app, int& exit_code);
+void add_evaluate(CLI::App& app, int& exit_code);
+void add_gyro_scale(CLI::App& app, int& exit_code);
+void add_score(CLI::App& app, int& exit_code);
 
 }  // namespace mocap::cmd

@@ -1,20 +1,24 @@
 // Headless mode: render --frames frames offscreen at a fixed 60 Hz animation clock and write the
-// last one as a PNG (for tests and documentation; runs under Xvfb + Mesa llvmpipe).
+// last one as a PNG (for tests and documentation). With an X (or Wayland) display through a
+// hidden GLFW window; without one through EGL on Mesa's surfaceless platform (llvmpipe).
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <thread>
 
 #include "mocap/viewer/control_client.hpp"
+#include "mocap/viewer/egl_context.hpp"
 #include "mocap/viewer/gl_util.hpp"
 #include "mocap/viewer/offscreen.hpp"
 #include "viewer_options.hpp"
 
 namespace mocap::viewer {
 
-int run_screenshot(const ViewerOptions& o) {
-  auto source = make_source(o);
-  GlfwSession glfw;
-  GLFWwindow* window = create_gl_window(64, 64, false, "mocap-viewer (headless)");
+namespace {
+
+/// Renders --frames frames into an offscreen framebuffer of the current GL context and writes
+/// the PNG; returns the exit code.
+int render_screenshot(const ViewerOptions& o, PoseSource* source) {
   int rc = 0;
   {
     Offscreen target(o.width, o.height);
@@ -53,6 +57,27 @@ int run_screenshot(const ViewerOptions& o) {
       rc = 3;
     }
   }
+  return rc;
+}
+
+/// No X or Wayland display to open a window on.
+bool no_display() {
+  const char* x = std::getenv("DISPLAY");
+  const char* w = std::getenv("WAYLAND_DISPLAY");
+  return (!x || !*x) && (!w || !*w);
+}
+
+}  // namespace
+
+int run_screenshot(const ViewerOptions& o) {
+  auto source = make_source(o);
+  if (no_display()) {  // EGL on Mesa's surfaceless platform: no display server needed
+    EglContext egl;
+    return render_screenshot(o, source.get());
+  }
+  GlfwSession glfw;
+  GLFWwindow* window = create_gl_window(64, 64, false, "mocap-viewer (headless)");
+  const int rc = render_screenshot(o, source.get());
   glfwDestroyWindow(window);
   return rc;
 }

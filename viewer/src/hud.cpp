@@ -1,7 +1,11 @@
 // Heads-up display: frame rate and frame number, source, modes, per-sensor status, recording
 // indicator, calibration prompt and countdown, key help, and labels on flagged segments.
+#include <algorithm>
 #include <cstdio>
+#include <string>
+#include <vector>
 
+#include "mocap/viewer/hud_layout.hpp"
 #include "mocap/viewer/view.hpp"
 
 namespace mocap::viewer {
@@ -13,21 +17,6 @@ constexpr Rgba kGreen = {0.35f, 0.85f, 0.40f, 1};
 constexpr Rgba kYellow = {0.95f, 0.80f, 0.20f, 1};
 constexpr Rgba kRed = {0.95f, 0.22f, 0.18f, 1};
 constexpr Rgba kPanel = {0.04f, 0.045f, 0.06f, 0.72f};
-
-const char* state_name(uint8_t s) {
-  switch (s) {
-    case 0:
-      return "ABSENT";
-    case 1:
-      return "CONNECT";
-    case 2:
-      return "OK";
-    case 3:
-      return "STALE";
-    default:
-      return "ERROR";
-  }
-}
 
 Rgba state_colour(const SensorStatus& st) {
   if (st.state == 2) return (st.flags & kSegMagDisturbed) ? kYellow : kGreen;
@@ -43,30 +32,29 @@ void panel_text(TextRenderer& t, float x, float y, int scale, const char* s, con
   t.text(x, y, scale, s, c);
 }
 
-void sensor_table(TextRenderer& t, const PoseFrame& f, float x, float y) {
-  const int scale = 2;
+/// `s` at `scale` (one step smaller when it does not fit), wrapped to `max_w` on panels from
+/// (x, y) downwards; returns the height used.
+float panel_lines(TextRenderer& t, float x, float y, int scale, const std::string& s, const Rgba& c,
+                  float max_w) {
+  if (scale > 1 && hud_text_width(s, scale) > max_w) --scale;
   const float lh = TextRenderer::line_height(scale);
-  const int n = static_cast<int>(std::min<uint32_t>(f.sensor_count, kMaxSensors));
-  const char* header = "SENSOR SEGMENT     STATE    HZ AGE MS DROP FLAGS";
-  t.rect(x - 4, y - 4, TextRenderer::text_width(header, scale) + 8,
-         lh * static_cast<float>(n + 1) + 6, kPanel);
-  t.text(x, y, scale, header, kGrey);
-  char line[128];
-  for (int i = 0; i < n; ++i) {
-    const SensorStatus& st = f.sensors[static_cast<size_t>(i)];
-    char name[sizeof st.name + 1] = {};
-    std::snprintf(name, sizeof name, "%.*s", static_cast<int>(sizeof st.name), st.name);
-    const char* seg = st.segment >= 0 && st.segment < kSegmentCount
-                          ? kSegmentNames[static_cast<size_t>(st.segment)].data()
-                          : "-";
-    std::snprintf(line, sizeof line, "%-6.6s %-11.11s %-7s %4.0f %6.0f %4u %s%s", name, seg,
-                  state_name(st.state), static_cast<double>(st.rate_hz),
-                  static_cast<double>(st.last_age_ms), st.drops,
-                  (st.flags & kSegMagDisturbed)     ? "MAG "
-                  : (st.flags & kSegMagNoReference) ? "MAG? "
-                                                    : "",
-                  (st.flags & kSegAtRest) ? "REST" : "");
-    t.text(x, y + lh * static_cast<float>(i + 1), scale, line, state_colour(st));
+  float used = 0;
+  for (const std::string& line : wrap_hud_text(s, scale, max_w)) {
+    panel_text(t, x, y + used, scale, line.c_str(), c);
+    used += lh;
+  }
+  return used;
+}
+
+/// The sensor table (hud_layout.hpp: whole names, as many columns as fit `max_w`).
+void sensor_table(TextRenderer& t, const PoseFrame& f, float x, float y, float max_w, float max_h) {
+  const SensorTableLayout l = layout_sensor_table(f, max_w, max_h);
+  const float lh = TextRenderer::line_height(l.scale);
+  t.rect(x - 4, y - 4, l.width_px + 8, lh * static_cast<float>(l.lines.size()) + 6, kPanel);
+  for (size_t i = 0; i < l.lines.size(); ++i) {
+    const HudLine& h = l.lines[i];
+    t.text(x, y + lh * static_cast<float>(i), l.scale, h.text,
+           h.sensor < 0 ? kGrey : state_colour(f.sensors[static_cast<size_t>(h.sensor)]));
   }
 }
 
@@ -91,63 +79,87 @@ void build_hud(TextRenderer& t, const HudInfo& hud, const ViewSettings& settings
         std::snprintf(line, sizeof line, "%s %s", kSegmentNames[static_cast<size_t>(s)].data(),
                       label.data());
         const auto rgb = segment_rgb(s, frames[a].segment_flags[static_cast<size_t>(s)]);
-        panel_text(t, px->x() + 14, px->y() - 8, 2, line, {rgb[0], rgb[1], rgb[2], 1});
+        // Beside the segment, moved left where it would leave the window.
+        const float x = std::min(
+            px->x() + 14, static_cast<float>(width) - 16 - TextRenderer::text_width(line, 2));
+        panel_text(t, std::max(4.0f, x), px->y() - 8, 2, line, {rgb[0], rgb[1], rgb[2], 1});
       }
     }
   }
   if (!settings.hud) return;
 
-  const float lh = TextRenderer::line_height(2);
-  std::snprintf(line, sizeof line, "MOCAP-VIEWER  %5.0f FPS  FRAME %llu", hud.fps,
-                static_cast<unsigned long long>(f ? f->frame : 0));
-  panel_text(t, 12, 12, 2, line, kWhite);
-  panel_text(t, 12, 12 + lh, 2, hud.source.c_str(), kGrey);
-  std::snprintf(line, sizeof line, "%s%s%s%s", settings.style.stick ? "STICK" : "SOLID",
-                settings.style.sensor_axes ? "  AXES" : "", settings.follow ? "  FOLLOW" : "",
-                hud.paused ? "  PAUSED" : "");
-  panel_text(t, 12, 12 + 2 * lh, 2, line, hud.paused ? kYellow : kGrey);
+  // Everything stays within the window: 12 px margins, panels' padding.
+  const float max_w = std::max(16.0f, static_cast<float>(width) - 32);
 
-  if (f) {
-    // Top right: recording indicator and source kind.
-    float x = static_cast<float>(width) - 12;
-    if (f->flags & kFrameRecording) {
-      x -= TextRenderer::text_width("REC", 3) + 30;
-      t.rect(x, 12, 20, 20, kRed);
-      t.text(x + 28, 10, 3, "REC", kRed);
-    }
-    const char* kind = (f->flags & kFrameReplay) ? "REPLAY" : (f->flags & kFrameDemo) ? "DEMO" : "";
-    if (*kind) panel_text(t, x - TextRenderer::text_width(kind, 2) - 20, 14, 2, kind, kGrey);
-
-    if (f->sensor_count > 0) sensor_table(t, *f, 12, 12 + 4 * lh);
-
-    // Calibration prompt and countdown, centred.
-    const char* prompt = nullptr;
-    if (f->flags & kFrameCalibrating) {
-      std::snprintf(line, sizeof line, "CALIBRATING%s%s: HOLD STILL  %.1f S",
-                    hud.calibration_pose.empty() ? "" : " ", hud.calibration_pose.c_str(),
-                    static_cast<double>(f->calib_countdown_s));
-      prompt = line;
-    } else if (!hud.calibration_prompt.empty() && !(f->flags & kFrameReplay)) {
-      prompt = hud.calibration_prompt.c_str();  // the moves still to do, or a refusal
-    } else if (!(f->flags & (kFrameCalibrated | kFrameReplay | kFrameDemo))) {
-      prompt = "NOT CALIBRATED: PRESS N (N-POSE) OR T (T-POSE)";
-    }
-    if (prompt) {
-      const int scale =
-          TextRenderer::text_width(prompt, 3) + 24 > static_cast<float>(width) ? 2 : 3;
-      panel_text(t, 0.5f * (static_cast<float>(width) - TextRenderer::text_width(prompt, scale)),
-                 0.22f * static_cast<float>(height), scale, prompt, kYellow);
-    }
-  }
-
-  const float bottom = static_cast<float>(height) - 12 - lh;
-  if (!hud.message.empty()) panel_text(t, 12, bottom - lh - 6, 2, hud.message.c_str(), kYellow);
-  const char* keys =
+  // Bottom first (the table above must end before it): the key help (smaller, then wrapped, in
+  // a narrow window) and the last message above it.
+  const std::string keys =
       "DRAG ORBIT  RDRAG PAN  WHEEL ZOOM  R RESET  F FOLLOW  S STICK  A AXES  E EARTH  "
       "SPACE PAUSE  N/T CALIB  H HEADING  Q QUIT";
-  const int key_scale = TextRenderer::text_width(keys, 2) + 24 > static_cast<float>(width) ? 1 : 2;
-  panel_text(t, 12, static_cast<float>(height) - 12 - TextRenderer::line_height(key_scale),
-             key_scale, keys, kGrey);
+  const int key_scale = hud_text_width(keys, 2) > max_w ? 1 : 2;
+  const std::vector<std::string> key_lines = wrap_hud_text(keys, key_scale, max_w);
+  const float key_lh = TextRenderer::line_height(key_scale);
+  float bottom = static_cast<float>(height) - 12 - key_lh * static_cast<float>(key_lines.size());
+  for (size_t i = 0; i < key_lines.size(); ++i)
+    panel_text(t, 12, bottom + key_lh * static_cast<float>(i), key_scale, key_lines[i].c_str(),
+               kGrey);
+  if (!hud.message.empty()) {
+    const int scale = hud_text_width(hud.message, 2) > max_w ? 1 : 2;
+    const auto msg = wrap_hud_text(hud.message, scale, max_w);
+    bottom -= TextRenderer::line_height(scale) * static_cast<float>(msg.size()) + 6;
+    panel_lines(t, 12, bottom, scale, hud.message, kYellow, max_w);
+  }
+
+  // Top right: recording indicator and source kind, unless the window is too narrow for them
+  // beside the top-left lines (then the kind joins the mode line).
+  const char* kind = !f                          ? ""
+                     : (f->flags & kFrameReplay) ? "REPLAY"
+                     : (f->flags & kFrameDemo)   ? "DEMO"
+                                                 : "";
+  std::snprintf(line, sizeof line, "MOCAP-VIEWER  %5.0f FPS  FRAME %llu", hud.fps,
+                static_cast<unsigned long long>(f ? f->frame : 0));
+  const std::string title = line;
+  const float left_w = std::max(hud_text_width(title, 2), hud_text_width(hud.source, 2));
+  float right_x = static_cast<float>(width) - 12;
+  if (f && (f->flags & kFrameRecording)) right_x -= TextRenderer::text_width("REC", 3) + 30;
+  const float kind_x = right_x - TextRenderer::text_width(kind, 2) - 20;
+  const bool kind_top_right = *kind && kind_x > 12 + left_w + 12;
+  if (f && (f->flags & kFrameRecording) && right_x > 12 + left_w + 12) {
+    t.rect(right_x, 12, 20, 20, kRed);
+    t.text(right_x + 28, 10, 3, "REC", kRed);
+  }
+  if (kind_top_right) panel_text(t, kind_x, 14, 2, kind, kGrey);
+
+  float y = 12;
+  y += panel_lines(t, 12, y, 2, title, kWhite, max_w);
+  y += panel_lines(t, 12, y, 2, hud.source, kGrey, max_w);
+  std::snprintf(line, sizeof line, "%s%s%s%s%s%s", settings.style.stick ? "STICK" : "SOLID",
+                settings.style.sensor_axes ? "  AXES" : "", settings.follow ? "  FOLLOW" : "",
+                hud.paused ? "  PAUSED" : "", kind_top_right || !*kind ? "" : "  ",
+                kind_top_right ? "" : kind);
+  y += panel_lines(t, 12, y, 2, line, hud.paused ? kYellow : kGrey, max_w);
+  if (!f) return;
+  const float lh = TextRenderer::line_height(2);
+  if (f->sensor_count > 0) sensor_table(t, *f, 12, y + lh, max_w, bottom - (y + lh) - 12);
+
+  // Calibration prompt and countdown, centred.
+  const char* prompt = nullptr;
+  if (f->flags & kFrameCalibrating) {
+    std::snprintf(line, sizeof line, "CALIBRATING%s%s: HOLD STILL  %.1f S",
+                  hud.calibration_pose.empty() ? "" : " ", hud.calibration_pose.c_str(),
+                  static_cast<double>(f->calib_countdown_s));
+    prompt = line;
+  } else if (!hud.calibration_prompt.empty() && !(f->flags & kFrameReplay)) {
+    prompt = hud.calibration_prompt.c_str();  // the moves still to do, or a refusal
+  } else if (!(f->flags & (kFrameCalibrated | kFrameReplay | kFrameDemo))) {
+    prompt = "NOT CALIBRATED: PRESS N (N-POSE) OR T (T-POSE)";
+  }
+  if (prompt) {
+    const int scale = hud_text_width(prompt, 3) + 24 > static_cast<float>(width) ? 2 : 3;
+    const float w = std::min(hud_text_width(prompt, scale), max_w);
+    panel_lines(t, 0.5f * (static_cast<float>(width) - w), 0.22f * static_cast<float>(height),
+                scale, prompt, kYellow, max_w);
+  }
 }
 
 }  // namespace mocap::viewer

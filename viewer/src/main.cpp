@@ -4,7 +4,7 @@
 #include <cstring>
 #include <exception>
 
-#include "mocap/core/cli_args.hpp"
+#include "mocap/core/cli.hpp"
 #include "mocap/skeleton/posture_shm.hpp"
 #include "mocap/viewer/bvh_source.hpp"
 #include "mocap/viewer/net_source.hpp"
@@ -50,14 +50,66 @@ bool parse_size(const std::string& s, int& w, int& h) {
          h <= 8192;
 }
 
-int usage(const CliArgs& cli, const char* error) {
-  if (error) std::fprintf(stderr, "mocap-viewer: %s\n\n", error);
-  std::fprintf(error ? stderr : stdout,
-               "usage: mocap-viewer [options]\n"
-               "Shows the avatar of the local daemon (shared posture), a remote stream, a file,\n"
-               "or a synthetic performer. Keys: see docs/viewer.md.\n\n%s",
-               cli.help().c_str());
-  return error ? 2 : 0;
+/// mocap-viewer's command line: every option declared here, into ViewerOptions and the flags
+/// below (turned into ViewSettings after parsing).
+struct Flags {
+  bool no_vsync = false, stick = false, sensor_axes = false, no_earth_axes = false, no_hud = false,
+       no_labels = false, no_shadows = false, follow = false;
+  std::string size = "1280x720", control_alias;
+};
+
+void declare_options(CLI::App& app, ViewerOptions& o, Flags& f) {
+  app.footer("Keys: see docs/viewer.md.");
+  CLI::Option* source =
+      app.add_option("--source", o.source,
+                     "shm (the local daemon's shared posture) or synthetic (a virtual performer)")
+          ->check(CLI::IsMember({"shm", "synthetic"}));
+  app.add_option("--shm", o.shm_name, "shared posture name (default /mocap-posture-<uid>)");
+  CLI::Option* connect = app.add_option(
+      "--connect", o.connect,
+      "HOST:PORT of a remote daemon's JSON stream (one source: not with --play or --source)");
+  CLI::Option* play = app.add_option(
+      "--play", o.play,
+      "SESSION or BVH file to play back (one source: not with --connect or --source)");
+  connect->excludes(source)->excludes(play);
+  play->excludes(source);
+  app.add_option("--avatars", o.avatars, "number of avatars for the synthetic source (crowd)")
+      ->check(CLI::Range(1, 10000));
+  app.add_option("--body-height", o.height_m, "body height in metres for the avatar's proportions")
+      ->check(CLI::Range(0.5, 2.6));
+  app.add_option("--size", f.size, "window or image size WxH (16..8192)")
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            int w = 0, h = 0;
+            return parse_size(s, w, h) ? std::string() : "'" + s + "' is not WxH (16..8192)";
+          },
+          "WxH"));
+  CLI::Option* shot = app.add_option(
+      "--screenshot", o.screenshot,
+      "render offscreen and write this PNG, then exit (no display needed: without X, EGL "
+      "on Mesa's surfaceless platform)");
+  app.add_option("--frames", o.frames, "frames to render before the screenshot")
+      ->check(CLI::Range(1, 1000000));
+  app.add_option("--wait", o.wait_s, "screenshot: seconds to wait for a live source's first pose")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--bench-seconds", o.bench_seconds, "seconds per benchmark case")
+      ->check(CLI::PositiveNumber);
+  CLI::Option* socket = app.add_option(
+      "--socket", o.control_socket, "daemon control socket (default $XDG_RUNTIME_DIR/mocapd.sock)");
+  cli::add_deprecated_alias(app, "--control", f.control_alias, socket);
+  app.add_flag("--bench", o.bench,
+               "measure frame rates (1 and 150 avatars) in a window and print JSON (not with "
+               "--screenshot)")
+      ->excludes(shot);
+  app.add_flag("--no-vsync", f.no_vsync, "do not wait for the display's refresh");
+  app.add_flag("--stick", f.stick, "stick figure instead of solid capsules");
+  app.add_flag("--sensor-axes", f.sensor_axes, "draw each segment's x/y/z axes");
+  app.add_flag("--no-earth-axes", f.no_earth_axes, "hide the earth axes at the origin");
+  app.add_flag("--no-hud", f.no_hud, "hide the heads-up display");
+  app.add_flag("--no-labels", f.no_labels, "do not label flagged segments");
+  app.add_flag("--no-shadows", f.no_shadows, "no shadows on the floor");
+  app.add_flag("--follow", f.follow,
+               "keep the camera over the pelvis (always when playing a file)");
 }
 
 }  // namespace
@@ -66,66 +118,27 @@ int usage(const CliArgs& cli, const char* error) {
 int main(int argc, char** argv) {
   using namespace mocap;
   using namespace mocap::viewer;
-  CliArgs cli;
-  cli.option("source", "shm (default: the local daemon's shared posture) or synthetic")
-      .option("shm", "shared posture name (default /mocap-posture-<uid>)")
-      .option("connect", "HOST:PORT of a remote daemon's JSON stream")
-      .option("play", "SESSION or BVH file to play back")
-      .option("avatars", "number of avatars for the synthetic source (crowd), default 1")
-      .option("body-height", "body height in metres for the avatar's proportions (1.75)")
-      .option("size", "window or image size WxH (1280x720)")
-      .option("screenshot", "render headless and write this PNG, then exit")
-      .option("frames", "frames to render before the screenshot (30)")
-      .option("wait", "headless: seconds to wait for a live source's first pose (5)")
-      .option("bench-seconds", "seconds per benchmark case (3)")
-      .option("control", "daemon control socket (default $XDG_RUNTIME_DIR/mocapd.sock)")
-      .flag("bench", "measure frame rates (1 and 150 avatars) and print JSON")
-      .flag("no-vsync", "do not wait for the display's refresh")
-      .flag("stick", "stick figure instead of solid capsules")
-      .flag("sensor-axes", "draw each segment's x/y/z axes")
-      .flag("no-earth-axes", "hide the earth axes at the origin")
-      .flag("no-hud", "hide the heads-up display")
-      .flag("no-labels", "do not label flagged segments")
-      .flag("no-shadows", "no shadows on the floor")
-      .flag("follow", "keep the camera over the pelvis")
-      .flag("help", "this text");
-  if (!cli.parse(argc, argv)) return usage(cli, cli.error().c_str());
-  if (cli.has("help")) return usage(cli, nullptr);
-  if (!cli.positional().empty())
-    return usage(cli, ("unexpected argument '" + cli.positional()[0] + "'").c_str());
-
+  CLI::App app{
+      "mocap-viewer: shows the avatar of the local daemon (shared posture), a remote stream, a "
+      "file, or a synthetic performer",
+      "mocap-viewer"};
+  cli::setup_program(app);
   ViewerOptions o;
-  o.source = cli.get_or("source", "shm");
-  o.shm_name = cli.get_or("shm", "");
-  if (auto c = cli.get("connect")) o.source = "connect", o.connect = *c;
-  if (auto p = cli.get("play")) o.source = "play", o.play = *p;
-  o.control_socket = cli.get_or("control", "");
-  long n = 1;
-  if (!cli.get_int("avatars", n) || n < 1 || n > 10000)
-    return usage(cli, "--avatars must be an integer in 1..10000");
-  o.avatars = static_cast<int>(n);
-  if (!cli.get_double("body-height", o.height_m) || !(o.height_m > 0.5 && o.height_m < 2.6))
-    return usage(cli, "--body-height must be a height in metres (0.5..2.6)");
-  if (auto s = cli.get("size"); s && !parse_size(*s, o.width, o.height))
-    return usage(cli, ("--size '" + *s + "' is not WxH (16..8192)").c_str());
-  o.screenshot = cli.get_or("screenshot", "");
-  long frames = o.frames;
-  if (!cli.get_int("frames", frames) || frames < 1 || frames > 1000000)
-    return usage(cli, "--frames must be a positive integer");
-  o.frames = static_cast<int>(frames);
-  if (!cli.get_double("wait", o.wait_s) || !(o.wait_s >= 0))
-    return usage(cli, "--wait must be a number of seconds");
-  if (!cli.get_double("bench-seconds", o.bench_seconds) || !(o.bench_seconds > 0))
-    return usage(cli, "--bench-seconds must be positive");
-  o.bench = cli.has("bench");
-  o.vsync = !cli.has("no-vsync");
-  o.settings.style.stick = cli.has("stick");
-  o.settings.style.sensor_axes = cli.has("sensor-axes");
-  o.settings.earth_axes = !cli.has("no-earth-axes");
-  o.settings.hud = !cli.has("no-hud");
-  o.settings.labels = !cli.has("no-labels");
-  o.settings.shadows = !cli.has("no-shadows");
-  o.settings.follow = cli.has("follow") || o.source == "play";  // files walk off anywhere
+  Flags f;
+  declare_options(app, o, f);
+  if (auto done = cli::parse(app, argc, argv)) return *done;
+  if (!o.connect.empty()) o.source = "connect";
+  if (!o.play.empty()) o.source = "play";
+  if (!f.control_alias.empty()) o.control_socket = f.control_alias;
+  parse_size(f.size, o.width, o.height);
+  o.vsync = !f.no_vsync;
+  o.settings.style.stick = f.stick;
+  o.settings.style.sensor_axes = f.sensor_axes;
+  o.settings.earth_axes = !f.no_earth_axes;
+  o.settings.hud = !f.no_hud;
+  o.settings.labels = !f.no_labels;
+  o.settings.shadows = !f.no_shadows;
+  o.settings.follow = f.follow || o.source == "play";  // files walk off anywhere
 
   try {
     if (o.bench) return run_bench(o);

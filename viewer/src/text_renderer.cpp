@@ -1,6 +1,8 @@
 // Bitmap-font text rendering: one atlas texture, one instanced quad per glyph.
 #include "mocap/viewer/text_renderer.hpp"
 
+#include "mocap/viewer/hud_layout.hpp"
+
 #include <cstddef>
 
 #include "mocap/viewer/bitmap_font.hpp"
@@ -111,7 +113,7 @@ void TextRenderer::rect(float x, float y, float w, float h, const Rgba& rgba) {
 }
 
 float TextRenderer::text_width(std::string_view s, int scale) {
-  return static_cast<float>(s.size() * kCellW * static_cast<size_t>(scale));
+  return hud_text_width(s, scale);
 }
 
 float TextRenderer::line_height(int scale) {

@@ -15,4 +15,8 @@ namespace mocap::daemon {
 /// address when one cannot start (e.g. the port is taken): the daemon never runs half-configured.
 std::vector<std::unique_ptr<FrameSink>> make_outputs(const Config& cfg, Logger& log);
 
+/// The TCP port the pose JSON stream among `outputs` listens on (the one picked when the
+/// configured port is 0); 0 when there is none.
+int json_stream_port(const std::vector<std::unique_ptr<FrameSink>>& outputs);
+
 }  // namespace mocap::daemon
