@@ -19,7 +19,7 @@ const char* kUsage =
     "  reset-heading            re-align the heading (stand upright facing forward)\n"
     "  record start [NAME]      record a session into a new file NAME inside the daemon's\n"
     "                           recording.directory (never overwritten: an existing file is an\n"
-    "                           error); no NAME: a fresh take-YYYYMMDD-HHMMSS.mcap\n"
+    "                           error); no NAME: a fresh take-YYYYMMDD-HHMMSS.mocapses\n"
     "  record stop              close the recording; prints duration, frames, samples, drops,\n"
     "                           bytes\n"
     "  quit                     stop the daemon\n"

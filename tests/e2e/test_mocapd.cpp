@@ -181,16 +181,16 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   EXPECT_FALSE(bad["ok"].get<bool>());
 
   // Record 1.5 s, stop, record again and stop with SIGTERM.
-  EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "start", "a.mcap"}), 0);
+  EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "start", "a.mocapses"}), 0);
   std::this_thread::sleep_for(1500ms);
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "stop"}), 0);
-  EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "start", "b.mcap"}), 0);
+  EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "start", "b.mocapses"}), 0);
   std::this_thread::sleep_for(700ms);
   kill(d, SIGTERM);
   EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
   EXPECT_FALSE(fs::exists(sock));
 
-  for (const char* f : {"a.mcap", "b.mcap"}) {
+  for (const char* f : {"a.mocapses", "b.mocapses"}) {
     mocap::SessionReader r;
     std::string err;
     ASSERT_TRUE(r.open((dir / f).string(), &err)) << err;
@@ -214,12 +214,12 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   for (const char* source : {"samples", "raw"}) {
     const std::string p1 = (dir / (std::string(source) + "1.csv")).string();
     const std::string p2 = (dir / (std::string(source) + "2.csv")).string();
-    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mcap").string(), "--source", source,
+    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mocapses").string(), "--source", source,
                    "--poses", p1, "--quiet"},
                   &out),
               0)
         << out;
-    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mcap").string(), "--source", source,
+    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mocapses").string(), "--source", source,
                    "--poses", p2, "--bvh", (dir / "a.bvh").string(), "--quiet"}),
               0);
     const std::string a = slurp(p1), b = slurp(p2);
@@ -265,11 +265,13 @@ TEST(Mocapd, CheckConfigWarnsWhenTheRateExceedsTheBaud) {
 
 // Golden: recorded sessions under tests/data/ replay to their stored expected poses (numeric
 // tolerance: 1e-4 on quaternion components, 1e-3 m on positions). After an intended change,
-// regenerate with scripts/regen-golden.
+// regenerate with scripts/regen-golden. The session extension is `.mocapses`; the golden
+// session keeps its older `.mcap` name on purpose: files are identified by their magic, so it
+// also checks that sessions recorded before the rename still replay.
 TEST(Golden, RecordedSessionsReplayToExpectedPoses) {
   int checked = 0;
   for (const auto& e : fs::directory_iterator(fs::path(MOCAP_SOURCE_DIR) / "tests/data")) {
-    if (e.path().extension() != ".mcap") continue;
+    if (e.path().extension() != ".mocapses" && e.path().extension() != ".mcap") continue;
     fs::path expected = e.path();
     expected.replace_extension(".expected.csv");
     ASSERT_TRUE(fs::exists(expected)) << expected;

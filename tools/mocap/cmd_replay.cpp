@@ -87,7 +87,7 @@ int run_replay(int argc, char** argv) {
   if (!args.parse(argc, argv) || args.has("help") || args.positional().size() != 1) {
     if (!args.error().empty()) std::fprintf(stderr, "mocap replay: %s\n", args.error().c_str());
     std::fprintf(args.has("help") ? stdout : stderr,
-                 "usage: mocap replay INPUT(.mcap session | .csv samples) [options]\n%s",
+                 "usage: mocap replay INPUT(.mocapses session | .csv samples) [options]\n%s",
                  args.help().c_str());
     return args.has("help") ? 0 : 2;
   }
