@@ -11,5 +11,6 @@ int run_accuracy(int argc, char** argv);  // accuracy: virtual performer through
 int run_latency(int argc, char** argv);   // latency: pty bytes -> JSON line over TCP
 int run_capacity(int argc, char** argv);  // capacity: sensors x rate without drops, CPU use
 int run_replay(int argc, char** argv);    // replay: long session through filter+skeleton+BVH
+int run_record(int argc, char** argv);    // record: session block compression, size and CPU
 
 }  // namespace mocap::bench

@@ -622,6 +622,8 @@ Config read_root(const toml::table& root, Ctx& ctx) {
     k.boolean("samples", c.recording.samples);
     k.boolean("poses", c.recording.poses);
     k.str("auto_start", c.recording.auto_start);
+    k.str("compression", c.recording.compression, {"none", "zstd"});
+    k.integer("compression_level", c.recording.compression_level, 1, 19);
     k.finish();
   }
   {
@@ -936,7 +938,9 @@ std::string config_to_toml(const Config& c) {
                                        {"raw", c.recording.raw},
                                        {"samples", c.recording.samples},
                                        {"poses", c.recording.poses},
-                                       {"auto_start", c.recording.auto_start}});
+                                       {"auto_start", c.recording.auto_start},
+                                       {"compression", c.recording.compression},
+                                       {"compression_level", c.recording.compression_level}});
   root.insert("demo", toml::table{{"path", c.demo.path},
                                   {"protocol", c.demo.protocol},
                                   {"rate_hz", c.demo.rate_hz},

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -297,4 +298,71 @@ TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
       static_cast<unsigned long long>(block_begin), static_cast<unsigned long long>(block_end),
       static_cast<unsigned long long>(block_end - block_begin),
       export_csv(dir, dir.file("mid.mocapses"), "mid2").frames, original.frames, original.frames);
+}
+
+// recording.compression = "zstd" in the real mocapd: the take has compressed blocks, exports
+// the same frames as it would uncompressed, and one flipped bit in the middle loses only the
+// compressed block holding it (reported, exit status 3).
+TEST(Recordings, ACompressedTakeExportsAndABitFlipLosesOnlyItsCompressedBlock) {
+  TempDir dir;
+  TwoSensorRig rig(dir);
+  Daemon d(dir, "zstd",
+           base_config(dir, free_tcp_port(), "compression = \"zstd\"\n") + rig.sensors_toml());
+  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
+  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  ASSERT_TRUE(d.call("record start take.mocapses").value("ok", false));
+  std::this_thread::sleep_for(2000ms);
+  const auto stop = d.call("record stop");
+  ASSERT_TRUE(stop.value("ok", false)) << stop.dump();
+  EXPECT_EQ(d.quit(), 0) << d.log_text();
+  const std::string path = dir.file("take.mocapses");
+  EXPECT_EQ(stop.value("bytes", uint64_t{0}), fs::file_size(path)) << stop.dump();
+  const Exported original = export_csv(dir, path, "original");
+  ASSERT_EQ(original.code, 0) << original.err;
+  ASSERT_GT(original.frames, 10u) << original.err;
+  EXPECT_EQ(poses_in(path), stop.value("frames", uint64_t{0}));
+
+  // Which compressed blocks hold how many poses.
+  const std::string bytes = slurp(path);
+  std::map<uint64_t, int> poses_at;
+  uint64_t compressed = 0;
+  {
+    SessionReader r;
+    std::string err;
+    ASSERT_TRUE(r.open(path, &err)) << err;
+    SessionReader::Block b;
+    while (r.next(b))
+      if (b.type == session::BlockType::pose) poses_at[b.offset] += b.inner ? 1 : 0;
+    EXPECT_EQ(r.end(), SessionReader::End::clean);
+    compressed = r.compressed_blocks();
+  }
+  EXPECT_GT(compressed, 0u);
+
+  const uint64_t mid = bytes.size() / 2;
+  std::string damaged = bytes;
+  damaged[mid] = static_cast<char>(damaged[mid] ^ 0x08);
+  const std::string dpath = dir.file("mid.mocapses");
+  { std::ofstream(dpath, std::ios::binary) << damaged; }
+  SessionReader r;
+  std::string err;
+  ASSERT_TRUE(r.open(dpath, &err)) << err;
+  SessionReader::Block b;
+  while (r.next(b)) {
+  }
+  ASSERT_EQ(r.damaged().size(), 1u);
+  const auto& range = r.damaged()[0];
+  EXPECT_LE(range.begin, mid);
+  EXPECT_GT(range.end, mid);
+  EXPECT_LE(range.end - range.begin, 70'000u);  // one block at most
+  const int lost_poses = poses_at.count(range.begin) ? poses_at[range.begin] : 1;
+  const Exported e = export_csv(dir, dpath, "mid");
+  EXPECT_EQ(e.code, 3) << e.err;
+  EXPECT_GE(e.frames + static_cast<size_t>(lost_poses), original.frames) << e.err;
+  EXPECT_GT(e.frames, 0u);
+  std::printf(
+      "[figures] zstd take: %zu bytes, %llu compressed blocks, %zu frames; bit flip at byte "
+      "%llu: %llu bytes skipped (%d poses in them), %zu frames exported\n",
+      bytes.size(), static_cast<unsigned long long>(compressed), original.frames,
+      static_cast<unsigned long long>(mid),
+      static_cast<unsigned long long>(range.end - range.begin), lost_poses, e.frames);
 }

@@ -16,6 +16,7 @@ int run_bench(int argc, char** argv) {
       {"filter", bench::run_filter},     {"skeleton", bench::run_skeleton},
       {"accuracy", bench::run_accuracy}, {"latency", bench::run_latency},
       {"capacity", bench::run_capacity}, {"replay", bench::run_replay},
+      {"record", bench::run_record},
   };
   if (argc >= 2) {
     for (const auto& b : kBenches)

@@ -127,6 +127,9 @@ struct RecordingConfig {
   bool samples = true;          ///< store decoded samples
   bool poses = true;            ///< store published pose frames
   std::string auto_start;       ///< file to start recording into at startup ("" = none)
+  // Block compression on the recorder's writer thread (docs/session-format.md).
+  std::string compression = "none";  ///< "none" | "zstd"
+  int compression_level = 3;         ///< zstd level 1..19
 };
 
 struct DaemonSection {
