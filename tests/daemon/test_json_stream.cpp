@@ -125,6 +125,14 @@ TEST(PoseJson, LineParsesBackWithTheDocumentedSchema) {
   EXPECT_EQ(j["v"], 1);
   EXPECT_EQ(j["frame"], 42);
   EXPECT_NEAR(j["t"].get<double>(), 1.92, 1e-9);
+  EXPECT_EQ(j["t_ns"].get<int64_t>(), f.t_ns);
+  EXPECT_TRUE(j["t_unix_ns"].is_null());  // no wall clock known: null, never a made-up time
+  {
+    PoseFrame g = f;
+    g.t_unix_ns = 1'764'151'200'123'456'789;  // 2025-11-26 10:00:00.123456789 UTC
+    const json k = json::parse(format(g));
+    EXPECT_EQ(k["t_unix_ns"].get<int64_t>(), g.t_unix_ns);  // exact: an integer, not a double
+  }
   EXPECT_EQ(j["flags"], mocap::kFrameCalibrated | mocap::kFrameRecording);
   ASSERT_EQ(j["segments"].size(), 16u);
   ASSERT_EQ(j["joints"].size(), 15u);
@@ -189,6 +197,7 @@ TEST(PoseJson, FullRigFitsTheMaximumLineAndTooSmallBufferFailsCleanly) {
     s.drops = s.errors = 0xffffffffu;
   }
   f.frame = std::numeric_limits<uint64_t>::max();
+  f.t_ns = f.t_unix_ns = std::numeric_limits<int64_t>::min();
   for (auto& p : f.p_earth_segment_m)
     p = {-1e9f, -1e9f, -1e9f};
   const std::string line = format(f);

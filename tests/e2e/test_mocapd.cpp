@@ -164,6 +164,22 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   ASSERT_EQ(lines.size(), 20u);
   for (size_t i = 1; i < lines.size(); ++i)
     EXPECT_GT(lines[i]["frame"], lines[i - 1]["frame"]);
+  // Wall clock beside the monotonic time: t_unix_ns - t_ns is realtime - monotonic (sampled by
+  // the pipeline), and the frames are from just now.
+  {
+    timespec rt{}, mt{};
+    clock_gettime(CLOCK_REALTIME, &rt);
+    clock_gettime(CLOCK_MONOTONIC, &mt);
+    const int64_t offset_now =
+        (rt.tv_sec - mt.tv_sec) * 1'000'000'000ll + (rt.tv_nsec - mt.tv_nsec);
+    const int64_t now_unix = rt.tv_sec * 1'000'000'000ll + rt.tv_nsec;
+    for (const auto& l : lines) {
+      const int64_t t_ns = l["t_ns"].get<int64_t>(), t_unix_ns = l["t_unix_ns"].get<int64_t>();
+      EXPECT_NEAR(static_cast<double>(t_unix_ns - t_ns), static_cast<double>(offset_now), 5e6);
+      EXPECT_LT(now_unix - t_unix_ns, 5'000'000'000ll);
+      EXPECT_GE(now_unix - t_unix_ns, 0);
+    }
+  }
   for (const auto& seg : lines.back()["segments"]) {
     double n = 0;
     for (const auto& c : seg["q"])
@@ -581,6 +597,15 @@ TEST(Mocapd, ReplaySetWithoutConfigChangesTheRecordedConfiguration) {
     lines = read_lines(port, 5);
   }
   EXPECT_EQ(lines.size(), 5u);
+  // A replay gives the recorded wall clock back: the session's realtime - monotonic offset.
+  {
+    mocap::SessionReader r;
+    std::string err;
+    ASSERT_TRUE(r.open(session, &err)) << err;
+    const int64_t recorded = r.header().t_start_unix_ns - r.header().t_start_host_ns;
+    for (const auto& l : lines)
+      EXPECT_EQ(l["t_unix_ns"].get<int64_t>() - l["t_ns"].get<int64_t>(), recorded) << l["frame"];
+  }
   kill(d, SIGTERM);
   EXPECT_GE(wait_exit(d), 0);
 }
