@@ -578,6 +578,7 @@ Config read_root(const toml::table& root, Ctx& ctx) {
       j.str("bind", c.outputs.json.bind);
       j.integer("port", c.outputs.json.port, 0, 65535);
       j.integer("max_clients", c.outputs.json.max_clients, 1, 1000);
+      j.str("unix_socket", c.outputs.json.unix_socket);
       j.finish();
       if (!valid_ipv4(c.outputs.json.bind))
         ctx.add(outs->get("json") ? outs->get_as<toml::table>("json")->get("bind") : nullptr,
@@ -916,7 +917,8 @@ std::string config_to_toml(const Config& c) {
   outs.insert("json", toml::table{{"enabled", c.outputs.json.enabled},
                                   {"bind", c.outputs.json.bind},
                                   {"port", c.outputs.json.port},
-                                  {"max_clients", c.outputs.json.max_clients}});
+                                  {"max_clients", c.outputs.json.max_clients},
+                                  {"unix_socket", c.outputs.json.unix_socket}});
   outs.insert("vmc", toml::table{{"enabled", c.outputs.vmc.enabled},
                                  {"host", c.outputs.vmc.host},
                                  {"port", c.outputs.vmc.port}});

@@ -5,6 +5,8 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -348,4 +350,81 @@ TEST(PoseJsonServer, BadBindAddressGivesAClearError) {
   EXPECT_FALSE(server.start(opt, &err));
   EXPECT_NE(err.find("cannot bind"), std::string::npos) << err;
   EXPECT_FALSE(server.publish(make_frame(1)));
+}
+
+// The private stream's Unix socket: created 0600, served like TCP, removed on stop; a regular
+// file at the path is refused and left untouched, a live socket (another server) is refused, a
+// stale one (its server gone) replaced, a relative path refused.
+TEST(PoseJsonServer, UnixSocketIsPrivateAndNeverTakesAnotherFile) {
+  char tmpl[] = "/tmp/mocap-json-unix-XXXXXX";
+  ASSERT_NE(::mkdtemp(tmpl), nullptr);
+  const std::string dir = tmpl, path = dir + "/pose.sock";
+  std::string err;
+  PoseJsonServer::Options opt;
+  opt.unix_path = path;
+  {
+    PoseJsonServer server;
+    ASSERT_TRUE(server.start(opt, &err)) << err;
+    EXPECT_EQ(server.port(), 0);
+    struct stat st {};
+    ASSERT_EQ(::lstat(path.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISSOCK(st.st_mode));
+    EXPECT_EQ(st.st_mode & 0777, 0600u);
+    // A client reads whole frames from it.
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_un a{};
+    a.sun_family = AF_UNIX;
+    std::strncpy(a.sun_path, path.c_str(), sizeof a.sun_path - 1);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    ASSERT_TRUE(wait_until([&] { return server.stats().clients_connected == 1; }));
+    ASSERT_TRUE(server.publish(make_frame(5)));
+    std::string got;
+    char buf[4096];
+    while (got.find('\n') == std::string::npos) {
+      pollfd p{fd, POLLIN, 0};
+      ASSERT_EQ(::poll(&p, 1, 5000), 1);
+      const ssize_t n = ::read(fd, buf, sizeof buf);
+      ASSERT_GT(n, 0);
+      got.append(buf, static_cast<std::size_t>(n));
+    }
+    EXPECT_EQ(json::parse(got.substr(0, got.find('\n')))["frame"], 5);
+    ::close(fd);
+    // A second server on the same live socket is refused.
+    PoseJsonServer second;
+    EXPECT_FALSE(second.start(opt, &err));
+    EXPECT_NE(err.find("another process is listening"), std::string::npos) << err;
+  }
+  struct stat st {};
+  EXPECT_NE(::lstat(path.c_str(), &st), 0);  // removed by stop()
+
+  // A stale socket (its server gone without removing it) is replaced.
+  {
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    sockaddr_un a{};
+    a.sun_family = AF_UNIX;
+    std::strncpy(a.sun_path, path.c_str(), sizeof a.sun_path - 1);
+    ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    ::close(fd);
+    PoseJsonServer server;
+    EXPECT_TRUE(server.start(opt, &err)) << err;
+  }
+  // A regular file is refused and kept.
+  {
+    FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("precious", f);
+    std::fclose(f);
+    PoseJsonServer server;
+    EXPECT_FALSE(server.start(opt, &err));
+    EXPECT_NE(err.find("is not a socket"), std::string::npos) << err;
+    EXPECT_NE(err.find(path), std::string::npos) << err;
+    ASSERT_EQ(::lstat(path.c_str(), &st), 0);
+    EXPECT_EQ(st.st_size, 8);
+    ::unlink(path.c_str());
+  }
+  opt.unix_path = "relative.sock";
+  PoseJsonServer server;
+  EXPECT_FALSE(server.start(opt, &err));
+  EXPECT_NE(err.find("not an absolute path"), std::string::npos) << err;
+  ::rmdir(dir.c_str());
 }

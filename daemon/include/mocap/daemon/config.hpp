@@ -89,6 +89,9 @@ struct JsonOutputConfig {
   std::string bind = "127.0.0.1";
   int port = 7301;
   int max_clients = 32;  ///< further connections are closed at once
+  /// Private stream: serve it on this Unix socket (mode 0600, only the daemon's user) instead of
+  /// TCP (bind/port unused). "" = TCP.
+  std::string unix_socket;
 };
 
 struct VmcOutputConfig {
