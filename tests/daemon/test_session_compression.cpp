@@ -1,11 +1,15 @@
 // Session compression and clock blocks on real files: a zstd-compressed recording reads back
 // block for block (and seeks into compressed blocks), is smaller, a damaged compressed block
 // costs only the blocks inside it, uncompressed files read the same as before, and the wall
-// clock recorded by the writer thread comes back from the reader.
+// clock recorded by the writer thread comes back from the reader; a full disk keeps every whole
+// compressed block.
 #include <gtest/gtest.h>
+#include <sys/mount.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <thread>
 
@@ -223,4 +227,44 @@ TEST(SessionCompression, TheWallClockBesideTheMonotonicOneComesBackFromTheReader
   EXPECT_EQ(poses, 5);
   EXPECT_EQ(r.end(), SessionReader::End::clean);
   EXPECT_LT(std::llabs(r.unix_offset_ns() - offset_now), 50'000'000ll);
+}
+
+// A full disk while compressing: the recording stops with the error, and every compressed block
+// written before it reads back whole (the torn one cut off), frames in order from the first.
+TEST(SessionCompression, DiskFullMidRecordingKeepsEveryWholeCompressedBlock) {
+  std::string why;
+  if (::geteuid() != 0 || !private_mounts(why))
+    GTEST_SKIP() << "needs root and a private mount namespace for a 64 KiB tmpfs: " << why;
+  TempDir dir;
+  ASSERT_EQ(::mount("tmpfs", dir.path().c_str(), "tmpfs", 0, "size=64k"), 0)
+      << std::strerror(errno);
+  const std::string path = dir.file("full.mocapses");
+  std::string err;
+  auto w = SessionWriter::create(path, make_header(), zstd_options(), &err);
+  ASSERT_TRUE(w) << err;
+  int i = 0;
+  for (; i < 2'000'000 && w->stats().state == SessionWriter::State::recording; ++i) {
+    PoseFrame f = make_pose(static_cast<uint64_t>(i));
+    f.q_earth_segment[0][1] = static_cast<float>(i % 977) * 1e-3f;  // less compressible
+    w->append_pose(f);
+    if (i % 50 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  const auto st = w->stats();
+  ASSERT_EQ(st.state, SessionWriter::State::failed) << i;
+  EXPECT_NE(st.error.find("No space left on device"), std::string::npos) << st.error;
+  EXPECT_FALSE(w->close());
+  EXPECT_GT(st.blocks_durable, 100u);
+  EXPECT_LT(st.bytes_blocks, st.bytes_uncompressed);
+  SessionReader r;
+  ASSERT_TRUE(r.open(path, &err)) << err;
+  SessionReader::Block b;
+  uint64_t n = 0;
+  while (r.next(b)) {
+    ASSERT_EQ(b.pose.frame, n);
+    ++n;
+  }
+  EXPECT_EQ(n, st.blocks_durable);
+  EXPECT_EQ(r.end(), SessionReader::End::clean) << r.tail_reason();
+  EXPECT_EQ(std::filesystem::file_size(path), st.bytes_durable);
+  ::umount2(dir.path().c_str(), MNT_DETACH);
 }
