@@ -447,10 +447,13 @@ bool SessionReader::next(Block& block) {
       }
       if (p == Parse::bad) {  // its content is damaged (the outer checksum held): lose the rest
         group_pos_ = group_len_ = 0;
-        damaged_.push_back(
-            {group_offset_, group_end_, last_t_ns_, -1,
-             "compressed block holds a damaged block at offset " + std::to_string(group_offset_)});
-        damage_open_ = true;
+        if (std::none_of(damaged_.begin(), damaged_.end(),
+                         [&](const DamagedRange& d) { return d.begin == group_offset_; })) {
+          damaged_.push_back({group_offset_, group_end_, last_t_ns_, -1,
+                              "compressed block holds a damaged block at offset " +
+                                  std::to_string(group_offset_)});
+          damage_open_ = true;
+        }
         continue;
       }
       if (deliver(block)) return true;
