@@ -14,5 +14,6 @@ void add_accuracy(CLI::App& bench, int& exit_code);  // virtual performer throug
 void add_latency(CLI::App& bench, int& exit_code);   // pty bytes -> JSON line over TCP
 void add_capacity(CLI::App& bench, int& exit_code);  // sensors x rate without drops, CPU use
 void add_replay(CLI::App& bench, int& exit_code);    // long session through filter+skeleton+BVH
+void add_record(CLI::App& bench, int& exit_code);    // session block compression, size and CPU
 
 }  // namespace mocap::bench

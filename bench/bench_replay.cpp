@@ -107,7 +107,7 @@ int run_replay(const ReplayBenchOptions& o) {
   const fs::path dir = fs::path(o.dir) / ("mocap-bench-replay-" + std::to_string(::getpid()));
   std::error_code ec;
   fs::create_directories(dir, ec);
-  const std::string session = (dir / "session.mcap").string();
+  const std::string session = (dir / "session.mocapses").string();
   const std::string bvh = (dir / "out.bvh").string();
   const double load_before = load_average_1m();
   int rc = 0;

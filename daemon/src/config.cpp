@@ -378,7 +378,10 @@ void read_value(TableReader& r, const keys::Key<S>& k, T& (*at)(S&), S& s) {
   } else if constexpr (std::is_same_v<T, double>) {
     r.num(k.name, v, k.lo, k.hi);
   } else if constexpr (std::is_same_v<T, std::string>) {
-    r.str(k.name, v);
+    if (k.choices.empty())
+      r.str(k.name, v);
+    else
+      r.str(k.name, v, keys::split_choices(k.choices));
     if (k.ipv4 && !valid_ipv4(v))
       r.ctx().add(r.peek(k.name), join(r.path(), k.name), "'" + v + "' is not an IPv4 address");
   } else if constexpr (std::is_enum_v<T>) {

@@ -248,6 +248,10 @@ const Section<JsonOutputConfig>& section() {
        .lo = 1,
        .hi = 1000,
        .help = "stream clients served at once; further connections are closed at once"},
+      {.name = "unix_socket",
+       .at = AT(unix_socket),
+       .help = "absolute path: serve the stream on this Unix socket (mode 0600, private poses) "
+               "instead of TCP; `\"\"` = TCP (docs/reliability.md, trust model)"},
   };
   static const Section<S> s{"outputs.json", "", k};
   return s;
@@ -328,6 +332,16 @@ const Section<RecordingConfig>& section() {
        .at = AT(auto_start),
        .help = "start recording at startup into this name inside `directory`; never truncates: "
                "if it exists (a restart after a crash), `NAME-2.ext`, `NAME-3.ext`, ..."},
+      {.name = "compression",
+       .at = AT(compression),
+       .choices = "none, zstd",
+       .help = "block compression on the recorder's writer thread, never the pipeline's "
+               "(docs/session-format.md; ratio and CPU: `mocap bench record`)"},
+      {.name = "compression_level",
+       .at = AT(compression_level),
+       .lo = 1,
+       .hi = 19,
+       .help = "zstd level"},
   };
   static const Section<S> s{"recording", "", k};
   return s;
@@ -444,7 +458,7 @@ const Section<SensorConfig>& section() {
        .omit_default = true,
        .doc_default = "absent (uncalibrated)",
        .help = "the gyro's scale per sensor axis (after `axis_remap`) from its one-time "
-               "table-spin calibration: print it with `mocap gyro-scale spins.mcap` "
+               "table-spin calibration: print it with `mocap gyro-scale spins.mocapses` "
                "(docs/devices.md \"Gyro scale calibration\"); samples are divided by it"},
       {.name = "log_level",
        .at = AT(log_level),

@@ -1,6 +1,7 @@
-// PoseJsonServer: TCP listener and I/O thread for the pose JSON stream. The pipeline hands
-// formatted lines over through a fixed ring of slots; the I/O thread copies each line into every
-// client's bounded queue (or skips it for that client) and writes with non-blocking sockets.
+// PoseJsonServer: TCP (or private Unix socket) listener and I/O thread for the pose JSON stream.
+// The pipeline hands formatted lines over through a fixed ring of slots; the I/O thread copies each
+// line into every client's bounded queue (or skips it for that client) and writes with non-blocking
+// sockets.
 #include "mocap/daemon/json_stream.hpp"
 
 #include <arpa/inet.h>
@@ -11,6 +12,8 @@
 #include <poll.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -66,6 +69,11 @@ bool PoseJsonServer::start(const Options& options, std::string* error) {
     return false;
   }
   options_ = options;
+  if (!options.unix_path.empty()) {
+    if (!listen_unix(error)) return false;
+    port_ = 0;
+    return start_io();
+  }
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(options.port);
@@ -83,9 +91,52 @@ bool PoseJsonServer::start(const Options& options, std::string* error) {
   socklen_t len = sizeof addr;
   ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
   port_ = ntohs(addr.sin_port);
+  return start_io();
+}
 
+bool PoseJsonServer::listen_unix(std::string* error) {
+  const std::string& path = options_.unix_path;
+  auto fail = [&](const std::string& why) {
+    if (error) *error = "pose stream: Unix socket '" + path + "': " + why;
+    if (listen_fd_ >= 0) ::close(listen_fd_);
+    listen_fd_ = -1;
+    return false;
+  };
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  if (path.front() != '/') return fail("not an absolute path");
+  if (path.size() >= sizeof a.sun_path)
+    return fail("longer than " + std::to_string(sizeof a.sun_path - 1) + " bytes");
+  std::memcpy(a.sun_path, path.c_str(), path.size() + 1);
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0) {
+    if (!S_ISSOCK(st.st_mode)) return fail("exists and is not a socket (left untouched)");
+    const int probe = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    const bool live =
+        probe >= 0 && ::connect(probe, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
+    if (probe >= 0) ::close(probe);
+    if (live) return fail("another process is listening on it");
+    ::unlink(path.c_str());  // stale socket of a daemon that died
+  }
+  listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (listen_fd_ < 0) return fail(std::string("socket(): ") + std::strerror(errno));
+  const mode_t old = ::umask(0177);  // created 0600: only this user can connect
+  const int rc = ::bind(listen_fd_, reinterpret_cast<const sockaddr*>(&a), sizeof a);
+  const int bind_errno = errno;
+  ::umask(old);
+  if (rc != 0) return fail(std::strerror(bind_errno));
+  if (::chmod(path.c_str(), 0600) != 0 || ::listen(listen_fd_, 16) != 0) {
+    const std::string why = std::strerror(errno);
+    ::unlink(path.c_str());
+    return fail(why);
+  }
+  unix_bound_ = true;
+  return true;
+}
+
+bool PoseJsonServer::start_io() {
   slots_ = std::make_unique<Slot[]>(kSlots);
-  clients_ = std::make_unique<std::unique_ptr<Client>[]>(options.max_clients);
+  clients_ = std::make_unique<std::unique_ptr<Client>[]>(options_.max_clients);
   scratch_ = std::make_unique<char[]>(4096);
   client_count_ = 0;
   stop_.store(false);
@@ -134,6 +185,8 @@ void PoseJsonServer::stop() {
   listen_fd_ = -1;
   if (reserve_fd_ >= 0) ::close(reserve_fd_);
   reserve_fd_ = -1;
+  if (unix_bound_) ::unlink(options_.unix_path.c_str());
+  unix_bound_ = false;
 }
 
 void PoseJsonServer::remove_client(std::size_t i) {

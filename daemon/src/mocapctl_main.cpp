@@ -43,7 +43,7 @@ void declare_options(CLI::App& app, Options& o) {
   CLI::App* start = cli::add_command(
       *rec, "start",
       "record into a new file NAME inside the daemon's recording.directory (never overwritten: "
-      "an existing file is an error); no NAME: a fresh take-YYYYMMDD-HHMMSS.mcap");
+      "an existing file is an error); no NAME: a fresh take-YYYYMMDD-HHMMSS.mocapses");
   start->add_option("NAME", o.record_name, "file name of the take");
   start->callback(
       [&o] { o.line = o.record_name.empty() ? "record start" : "record start " + o.record_name; });

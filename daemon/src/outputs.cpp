@@ -76,9 +76,13 @@ class JsonSink final : public FrameSink {
     o.bind_address = c.bind;
     o.port = static_cast<uint16_t>(c.port);
     o.max_clients = c.max_clients;
+    o.unix_path = c.unix_socket;
     std::string err;
     if (!server_.start(o, &err)) throw std::runtime_error("outputs.json: " + err);
-    log.info("pose JSON stream on %s:%u", c.bind.c_str(), server_.port());
+    if (c.unix_socket.empty())
+      log.info("pose JSON stream on %s:%u", c.bind.c_str(), server_.port());
+    else
+      log.info("pose JSON stream on Unix socket %s (mode 0600)", c.unix_socket.c_str());
   }
   void publish(const PoseFrame& f) override { server_.publish(f); }
   uint16_t port() const { return server_.port(); }

@@ -205,6 +205,8 @@ void Pipeline::publish(int64_t now_ns) {
     const int c = s.connected.load(std::memory_order_relaxed);
     if (c >= 0) core_.set_connected(static_cast<int>(i), c == 1);
   }
+  // The wall clock beside the monotonic one (sampled back to back), for the frames' t_unix_ns.
+  core_.set_unix_offset_ns(realtime_ns() - monotonic_ns());
   core_.publish_frame(now_ns);
   snapshot();
 }
@@ -219,6 +221,7 @@ void Pipeline::run() {
     log_.warn("%s", rt_error.c_str());
   const int64_t period = static_cast<int64_t>(std::llround(1e9 / cfg_.rate_hz));
   int64_t next_frame = monotonic_ns() + period;
+  core_.set_unix_offset_ns(realtime_ns() - monotonic_ns());
   while (running_.load(std::memory_order_relaxed)) {
     wait_until(wake_.fd(), next_frame);
     wake_.wait(0);  // clear pending notifications

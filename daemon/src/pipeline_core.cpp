@@ -137,6 +137,7 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
   engine_.build_frame(t_frame_ns, frame_);
   frame_.frame = ++frame_no_;
   frame_.t_ns = t_frame_ns;
+  frame_.t_unix_ns = unix_offset_known_ ? t_frame_ns + unix_offset_ns_ : 0;
   frame_.flags = (frame_.flags & kFrameCalibrated) | extra_flags_;
   if (calibrating_) {
     frame_.flags |= kFrameCalibrating;

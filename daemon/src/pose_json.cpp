@@ -132,6 +132,13 @@ std::size_t format_pose_json(const PoseFrame& f, char* out, std::size_t capacity
   o.integer(f.frame);
   o.put(",\"t\":");
   o.num(static_cast<double>(f.t_ns) * 1e-9, 6);
+  o.put(",\"t_ns\":");
+  o.integer(f.t_ns);
+  o.put(",\"t_unix_ns\":");
+  if (f.t_unix_ns != 0)
+    o.integer(f.t_unix_ns);
+  else
+    o.put("null");
   o.put(",\"flags\":");
   o.integer(f.flags);
   o.put(",\"segments\":[");

@@ -5,6 +5,8 @@ namespace mocap::daemon {
 
 PrefetchSource::PrefetchSource(std::unique_ptr<SampleSource> inner)
     : inner_(std::move(inner)), calibration_text_(inner_->calibration_text()) {
+  int64_t unused = 0;
+  offset_known_ = inner_->unix_offset_ns(unused);
   thread_ = std::thread([this] { run(); });
 }
 
@@ -34,11 +36,16 @@ void PrefetchSource::run() {
     while (n < kChunk && inner_->next(chunk[n]))
       ++n;
     chunk.resize(n);
+    int64_t offset = 0;
+    inner_->unix_offset_ns(offset);
     progress_.store(inner_->progress(), std::memory_order_relaxed);
     const bool end = n < kChunk;
     {
       std::lock_guard lock(mu_);
-      if (n > 0) ready_.push_back(std::move(chunk));
+      if (n > 0) {
+        ready_.push_back(std::move(chunk));
+        ready_offsets_.push_back(offset);
+      }
       if (end) {
         inner_error_ = inner_->error();
         done_ = true;
@@ -63,6 +70,9 @@ bool PrefetchSource::next(ImuSample& out) {
     }
     current_ = std::move(ready_.front());
     ready_.pop_front();
+    current_offset_ns_ = ready_offsets_.front();
+    ready_offsets_.pop_front();
+    current_offset_known_ = offset_known_;
     pos_ = 0;
     cv_.notify_all();
   }

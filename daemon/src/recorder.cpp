@@ -44,6 +44,9 @@ RecordTap* SessionRecorder::start(const std::string& name, bool unique) {
   RecordingFile f =
       create_recording_file(cfg_.recording.directory, name, unique, std::time(nullptr));
   SessionWriter::Options o;
+  if (cfg_.recording.compression == "zstd")
+    o.compression = SessionWriter::Options::Compression::zstd;
+  o.compression_level = cfg_.recording.compression_level;
   o.on_error = [this](const std::string& msg) { log_.error("recording failed: %s", msg.c_str()); };
   std::string err;
   writer_ = SessionWriter::create_fd(

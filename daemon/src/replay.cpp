@@ -72,6 +72,10 @@ class SessionSourceImpl final : public SampleSource {
   const Config& config() const override { return cfg_; }
   const std::string& error() const override { return error_; }
   double progress() const override { return static_cast<double>(reader_.tail_offset()) / size_; }
+  bool unix_offset_ns(int64_t& out) const override {
+    out = reader_.unix_offset_ns();
+    return true;
+  }
   std::string calibration_text() const override { return calib_text_; }
 
   bool next(ImuSample& out) override {
@@ -247,6 +251,7 @@ ReplayResult run_replay(SampleSource& src, PipelineCore& core, const ReplayOptio
       const int64_t wait = due - monotonic_ns();
       if (wait > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
     }
+    if (int64_t off = 0; src.unix_offset_ns(off)) core.set_unix_offset_ns(off);
     core.advance_clock_to(s.t_host_ns);
     core.process(s);
     r.t_last_ns = s.t_host_ns;

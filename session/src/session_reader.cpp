@@ -6,6 +6,7 @@
 
 #include <sys/stat.h>
 #include <zlib.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -83,6 +84,8 @@ int64_t block_time(const SessionReader::Block& b) {
       return b.sample.t_host_ns;
     case BlockType::pose:
       return b.pose.t_ns;
+    case BlockType::clock:
+      return b.t_host_ns;
     default:
       return -1;
   }
@@ -92,6 +95,7 @@ int64_t block_time(const SessionReader::Block& b) {
 
 SessionReader::~SessionReader() {
   if (file_) std::fclose(file_);
+  if (dctx_) ZSTD_freeDCtx(static_cast<ZSTD_DCtx*>(dctx_));
 }
 
 bool SessionReader::open(const std::string& path, std::string* error) {
@@ -141,11 +145,14 @@ bool SessionReader::read_header(const std::string& name, std::string* error) {
   damage_open_ = false;
   last_t_ns_ = -1;
   header_damage_.clear();
+  group_len_ = group_pos_ = 0;
+  compressed_blocks_ = 0;
   payload_.resize(kMaxBlockPayload + kBlockTrailerBytes);
   std::string msg;
   const auto read = [this](uint64_t o, uint8_t* d, std::size_t n) { return read_at(o, d, n); };
   if (parse_file_header(read, size_, header_, header_bytes_, msg)) {
     offset_ = header_bytes_;
+    unix_offset_ns_ = header_.t_start_unix_ns - header_.t_start_host_ns;
     skip_header_copies();
     return true;
   }
@@ -156,6 +163,7 @@ bool SessionReader::read_header(const std::string& name, std::string* error) {
   }
   if (recover_header(&header_damage_)) {
     header_damage_ = msg;
+    unix_offset_ns_ = header_.t_start_unix_ns - header_.t_start_host_ns;
     return true;
   }
   if (error) *error = name + ": " + msg;
@@ -238,8 +246,24 @@ uint64_t SessionReader::damaged_bytes() const {
   return n;
 }
 
-bool SessionReader::seek(uint64_t offset) {
+bool SessionReader::seek(uint64_t offset, uint32_t inner) {
   if (offset < header_bytes_ || offset > size_) return false;
+  if (inner) {
+    Block b;
+    uint64_t block_end = 0;
+    End kind = End::corrupt;
+    std::string why;
+    if (parse_at(offset, b, block_end, kind, why) != Parse::ok || b.type != BlockType::compressed ||
+        inner - 1 >= unpacked_len_)
+      return false;
+    group_len_ = unpacked_len_;
+    group_pos_ = inner - 1;
+    group_offset_ = offset;
+    group_end_ = block_end;
+    offset = block_end;
+  } else {
+    group_len_ = group_pos_ = 0;
+  }
   offset_ = offset;
   end_ = End::not_reached;
   tail_reason_.clear();
@@ -288,35 +312,103 @@ SessionReader::Parse SessionReader::parse_at(uint64_t at, Block& block, uint64_t
   }
   const std::span<const uint8_t> payload(payload_.data(), len);
   block.offset = at;
+  block.inner = 0;
   block.type = static_cast<BlockType>(hdr[2]);
-  bool ok = true;
-  switch (block.type) {
-    case BlockType::raw:
-      ok = len >= kRawPrefixBytes;
-      if (ok) {
-        block.device_index = get_u16(payload.data());
-        block.t_host_ns = static_cast<int64_t>(get_u64(payload.data() + 4));
-        block.raw = payload.subspan(kRawPrefixBytes);
-      }
-      break;
-    case BlockType::sample:
-      ok = decode_sample(payload, block.sample);
-      break;
-    case BlockType::pose:
-      ok = decode_pose(payload, block.pose);
-      break;
-    case BlockType::header_copy:
-      ok = len >= kHeaderCopyPrefixBytes;
-      block.raw = payload;
-      break;
-    default:
-      return Parse::skip;
+  if (block.type == BlockType::compressed) {
+    if (!unpack(payload, why)) return Parse::bad;
+    return Parse::ok;
   }
-  if (!ok) {
+  if (static_cast<uint8_t>(block.type) == 0 || static_cast<uint8_t>(block.type) > 6)
+    return Parse::skip;
+  if (!decode_payload(payload, block)) {
     why = "block does not decode (bad size or value)";
     return Parse::bad;
   }
   return Parse::ok;
+}
+
+bool SessionReader::decode_payload(std::span<const uint8_t> payload, Block& block) {
+  const std::size_t len = payload.size();
+  switch (block.type) {
+    case BlockType::raw:
+      if (len < kRawPrefixBytes) return false;
+      block.device_index = get_u16(payload.data());
+      block.t_host_ns = static_cast<int64_t>(get_u64(payload.data() + 4));
+      block.raw = payload.subspan(kRawPrefixBytes);
+      return true;
+    case BlockType::sample:
+      return decode_sample(payload, block.sample);
+    case BlockType::pose:
+      return decode_pose(payload, block.pose);
+    case BlockType::header_copy:
+      block.raw = payload;
+      return len >= kHeaderCopyPrefixBytes;
+    case BlockType::clock:
+      if (len != kClockPayloadBytes) return false;
+      block.t_host_ns = static_cast<int64_t>(get_u64(payload.data()));
+      block.t_unix_ns = static_cast<int64_t>(get_u64(payload.data() + 8));
+      return true;
+    default:
+      return false;
+  }
+}
+
+bool SessionReader::unpack(std::span<const uint8_t> payload, std::string& why) {
+  if (payload.size() < kCompressedPrefixBytes) {
+    why = "compressed block too short";
+    return false;
+  }
+  const uint32_t want = get_u32(payload.data());
+  if (want == 0 || want > kMaxGroupBytes) {
+    why = "compressed block length " + std::to_string(want) + " exceeds the limit";
+    return false;
+  }
+  if (!dctx_) dctx_ = ZSTD_createDCtx();
+  group_.resize(kMaxGroupBytes);
+  const std::size_t got = ZSTD_decompressDCtx(static_cast<ZSTD_DCtx*>(dctx_), group_.data(), want,
+                                              payload.data() + kCompressedPrefixBytes,
+                                              payload.size() - kCompressedPrefixBytes);
+  if (ZSTD_isError(got) || got != want) {
+    why = std::string("compressed block does not decompress (") +
+          (ZSTD_isError(got) ? ZSTD_getErrorName(got) : "wrong length") + ")";
+    return false;
+  }
+  unpacked_len_ = want;
+  return true;
+}
+
+SessionReader::Parse SessionReader::next_inner(Block& block) {
+  const uint8_t* p = group_.data() + group_pos_;
+  const std::size_t left = group_len_ - group_pos_;
+  if (left < kBlockHeaderBytes + kBlockTrailerBytes || get_u16(p) != kBlockSync) return Parse::bad;
+  const uint32_t len = get_u32(p + 4);
+  if (len > kMaxBlockPayload || kBlockHeaderBytes + len + kBlockTrailerBytes > left)
+    return Parse::bad;
+  const uLong crc = crc32(0L, p, static_cast<uInt>(kBlockHeaderBytes + len));
+  if (static_cast<uint32_t>(crc) != get_u32(p + kBlockHeaderBytes + len)) return Parse::bad;
+  block.offset = group_offset_;
+  block.inner = static_cast<uint32_t>(group_pos_ + 1);
+  block.type = static_cast<BlockType>(p[2]);
+  group_pos_ += kBlockHeaderBytes + len + kBlockTrailerBytes;
+  if (block.type == BlockType::compressed || block.type == BlockType::header_copy)
+    return Parse::bad;  // never nested, never packed
+  if (static_cast<uint8_t>(block.type) == 0 || static_cast<uint8_t>(block.type) > 6)
+    return Parse::skip;
+  return decode_payload({p + kBlockHeaderBytes, len}, block) ? Parse::ok : Parse::bad;
+}
+
+bool SessionReader::deliver(const Block& block) {
+  const int64_t t = block_time(block);
+  last_t_ns_ = t;
+  if (damage_open_) {
+    damaged_.back().t_after_ns = t;
+    damage_open_ = false;
+  }
+  if (block.type == BlockType::clock) {  // absorbed: the offset for the blocks after it
+    unix_offset_ns_ = block.t_unix_ns - block.t_host_ns;
+    return false;
+  }
+  return true;
 }
 
 uint64_t SessionReader::resync(uint64_t from, Block& scratch, uint64_t limit) {
@@ -347,6 +439,26 @@ bool SessionReader::next(Block& block) {
   if (end_ != End::not_reached) return false;
   if (!file_ && memory_.empty()) return stop(End::corrupt, "no session open");
   for (;;) {
+    if (group_pos_ < group_len_) {  // the blocks of an unpacked compressed block
+      const Parse p = next_inner(block);
+      if (p == Parse::skip) {
+        ++unknown_blocks_;
+        continue;
+      }
+      if (p == Parse::bad) {  // its content is damaged (the outer checksum held): lose the rest
+        group_pos_ = group_len_ = 0;
+        if (std::none_of(damaged_.begin(), damaged_.end(),
+                         [&](const DamagedRange& d) { return d.begin == group_offset_; })) {
+          damaged_.push_back({group_offset_, group_end_, last_t_ns_, -1,
+                              "compressed block holds a damaged block at offset " +
+                                  std::to_string(group_offset_)});
+          damage_open_ = true;
+        }
+        continue;
+      }
+      if (deliver(block)) return true;
+      continue;
+    }
     uint64_t block_end = 0;
     End kind = End::corrupt;
     std::string why;
@@ -363,13 +475,16 @@ bool SessionReader::next(Block& block) {
     if (p == Parse::ok) {
       offset_ = block_end;
       if (block.type == BlockType::header_copy) continue;
-      const int64_t t = block_time(block);
-      last_t_ns_ = t;
-      if (damage_open_) {
-        damaged_.back().t_after_ns = t;
-        damage_open_ = false;
+      if (block.type == BlockType::compressed) {
+        ++compressed_blocks_;
+        group_offset_ = block.offset;
+        group_end_ = block_end;
+        group_len_ = unpacked_len_;
+        group_pos_ = 0;
+        continue;
       }
-      return true;
+      if (deliver(block)) return true;
+      continue;
     }
     // Damage: resume at the next valid block, or end here.
     std::string reason = why + " at offset " + std::to_string(offset_);

@@ -1,4 +1,4 @@
-// `mocap bench latency|capacity|replay` in tiny configurations: they run, exit 0 and print one
+// `mocap bench latency|capacity|replay|record` in tiny configurations: they run, exit 0 and print one
 // JSON object whose counts are consistent. No timing is asserted (shared machines).
 #include <gtest/gtest.h>
 
@@ -55,6 +55,23 @@ TEST(BenchDaemon, ReplayReplaysEverySample) {
   EXPECT_GT(j.at("frames").get<int>(), 0);
   EXPECT_GT(j.at("bvh_mb").get<double>(), 0.0);
   EXPECT_GT(j.at("ratio_to_baseline").get<double>(), 0.0);
+}
+
+TEST(BenchDaemon, RecordCompressesEverySettingWithoutDrops) {
+  const auto j = run_bench("record --seconds 3 --repeat 1");
+  EXPECT_EQ(j.at("benchmark"), "record");
+  EXPECT_GT(j.at("input").at("poses").get<int>(), 0);
+  EXPECT_GT(j.at("input").at("raw").get<int>(), 0);
+  const auto& s = j.at("settings");
+  ASSERT_EQ(s.size(), 4u);
+  EXPECT_EQ(s[0].at("compression"), "none");
+  EXPECT_DOUBLE_EQ(s[0].at("size_ratio").get<double>(), 1.0);
+  for (const auto& r : s) {
+    EXPECT_EQ(r.at("dropped").get<int>(), 0) << r;
+    EXPECT_GT(r.at("file_mb").get<double>(), 0.0) << r;
+  }
+  for (std::size_t i = 1; i < s.size(); ++i)  // zstd always packs a recording
+    EXPECT_GT(s[i].at("size_ratio").get<double>(), 1.2) << s[i];
 }
 
 }  // namespace

@@ -3,6 +3,8 @@ find_package(nlohmann_json 3.11 REQUIRED)
 mocap_test(test_json_stream SOURCES test_json_stream.cpp
   LIBS mocap_daemon nlohmann_json::nlohmann_json TIMEOUT 120)
 mocap_test(test_session SOURCES test_session.cpp LIBS mocap_daemon TIMEOUT 120)
+mocap_test(test_session_compression SOURCES test_session_compression.cpp LIBS mocap_daemon
+  TIMEOUT 120)
 mocap_test(test_session_crash SOURCES test_session_crash.cpp LIBS mocap_daemon TIMEOUT 120)
 mocap_test(test_vmc SOURCES test_vmc.cpp LIBS mocap_daemon TIMEOUT 60)
 mocap_test(test_vrchat SOURCES test_vrchat.cpp LIBS mocap_daemon TIMEOUT 60)

@@ -1,10 +1,15 @@
 // Helpers for the session tests: deterministic samples/poses/raw bytes from an index, a temp
-// directory that removes itself, and reading a whole session back.
+// directory that removes itself, reading a whole session back, a private mount namespace.
 #pragma once
 
+#include <sched.h>
+#include <sys/mount.h>
+
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -127,6 +132,19 @@ inline std::vector<uint8_t> slurp(const std::string& path) {
     std::fclose(f);
   }
   return b;
+}
+
+/// Gives this test process its own mount namespace so test mounts vanish with it.
+inline bool private_mounts(std::string& why) {
+  if (::unshare(CLONE_NEWNS) != 0) {
+    why = std::string("unshare(CLONE_NEWNS): ") + std::strerror(errno);
+    return false;
+  }
+  if (::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0) {
+    why = std::string("make / private: ") + std::strerror(errno);
+    return false;
+  }
+  return true;
 }
 
 }  // namespace mocap::test

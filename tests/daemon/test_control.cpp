@@ -38,10 +38,10 @@ TEST(ControlProtocol, ParsesCommands) {
   r = parse_control_request("calibrate tpose", err);
   ASSERT_TRUE(r);
   EXPECT_EQ(r->argument, "tpose");
-  r = parse_control_request("record start /tmp/my session.mcap\n", err);
+  r = parse_control_request("record start /tmp/my session.mocapses\n", err);
   ASSERT_TRUE(r);
   EXPECT_EQ(r->command, ControlCommand::record_start);
-  EXPECT_EQ(r->argument, "/tmp/my session.mcap");
+  EXPECT_EQ(r->argument, "/tmp/my session.mocapses");
   r = parse_control_request("record start", err);  // no name: the daemon picks a fresh one
   ASSERT_TRUE(r);
   EXPECT_EQ(r->command, ControlCommand::record_start);
@@ -171,7 +171,7 @@ TEST(ControlServer, ARequestWhoseClientHungUpIsNotRunLater) {
   a.sun_family = AF_UNIX;
   std::strcpy(a.sun_path, path.c_str());
   ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  const std::string req = "record start late.mcap\n";
+  const std::string req = "record start late.mocapses\n";
   ASSERT_EQ(::send(fd, req.data(), req.size(), MSG_NOSIGNAL), static_cast<ssize_t>(req.size()));
   ::close(fd);
   {

@@ -5,6 +5,8 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -125,6 +127,14 @@ TEST(PoseJson, LineParsesBackWithTheDocumentedSchema) {
   EXPECT_EQ(j["v"], 1);
   EXPECT_EQ(j["frame"], 42);
   EXPECT_NEAR(j["t"].get<double>(), 1.92, 1e-9);
+  EXPECT_EQ(j["t_ns"].get<int64_t>(), f.t_ns);
+  EXPECT_TRUE(j["t_unix_ns"].is_null());  // no wall clock known: null, never a made-up time
+  {
+    PoseFrame g = f;
+    g.t_unix_ns = 1'764'151'200'123'456'789;  // 2025-11-26 10:00:00.123456789 UTC
+    const json k = json::parse(format(g));
+    EXPECT_EQ(k["t_unix_ns"].get<int64_t>(), g.t_unix_ns);  // exact: an integer, not a double
+  }
   EXPECT_EQ(j["flags"], mocap::kFrameCalibrated | mocap::kFrameRecording);
   ASSERT_EQ(j["segments"].size(), 16u);
   ASSERT_EQ(j["joints"].size(), 15u);
@@ -189,6 +199,7 @@ TEST(PoseJson, FullRigFitsTheMaximumLineAndTooSmallBufferFailsCleanly) {
     s.drops = s.errors = 0xffffffffu;
   }
   f.frame = std::numeric_limits<uint64_t>::max();
+  f.t_ns = f.t_unix_ns = std::numeric_limits<int64_t>::min();
   for (auto& p : f.p_earth_segment_m)
     p = {-1e9f, -1e9f, -1e9f};
   const std::string line = format(f);
@@ -339,4 +350,81 @@ TEST(PoseJsonServer, BadBindAddressGivesAClearError) {
   EXPECT_FALSE(server.start(opt, &err));
   EXPECT_NE(err.find("cannot bind"), std::string::npos) << err;
   EXPECT_FALSE(server.publish(make_frame(1)));
+}
+
+// The private stream's Unix socket: created 0600, served like TCP, removed on stop; a regular
+// file at the path is refused and left untouched, a live socket (another server) is refused, a
+// stale one (its server gone) replaced, a relative path refused.
+TEST(PoseJsonServer, UnixSocketIsPrivateAndNeverTakesAnotherFile) {
+  char tmpl[] = "/tmp/mocap-json-unix-XXXXXX";
+  ASSERT_NE(::mkdtemp(tmpl), nullptr);
+  const std::string dir = tmpl, path = dir + "/pose.sock";
+  std::string err;
+  PoseJsonServer::Options opt;
+  opt.unix_path = path;
+  {
+    PoseJsonServer server;
+    ASSERT_TRUE(server.start(opt, &err)) << err;
+    EXPECT_EQ(server.port(), 0);
+    struct stat st {};
+    ASSERT_EQ(::lstat(path.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISSOCK(st.st_mode));
+    EXPECT_EQ(st.st_mode & 0777, 0600u);
+    // A client reads whole frames from it.
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_un a{};
+    a.sun_family = AF_UNIX;
+    std::strncpy(a.sun_path, path.c_str(), sizeof a.sun_path - 1);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    ASSERT_TRUE(wait_until([&] { return server.stats().clients_connected == 1; }));
+    ASSERT_TRUE(server.publish(make_frame(5)));
+    std::string got;
+    char buf[4096];
+    while (got.find('\n') == std::string::npos) {
+      pollfd p{fd, POLLIN, 0};
+      ASSERT_EQ(::poll(&p, 1, 5000), 1);
+      const ssize_t n = ::read(fd, buf, sizeof buf);
+      ASSERT_GT(n, 0);
+      got.append(buf, static_cast<std::size_t>(n));
+    }
+    EXPECT_EQ(json::parse(got.substr(0, got.find('\n')))["frame"], 5);
+    ::close(fd);
+    // A second server on the same live socket is refused.
+    PoseJsonServer second;
+    EXPECT_FALSE(second.start(opt, &err));
+    EXPECT_NE(err.find("another process is listening"), std::string::npos) << err;
+  }
+  struct stat st {};
+  EXPECT_NE(::lstat(path.c_str(), &st), 0);  // removed by stop()
+
+  // A stale socket (its server gone without removing it) is replaced.
+  {
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    sockaddr_un a{};
+    a.sun_family = AF_UNIX;
+    std::strncpy(a.sun_path, path.c_str(), sizeof a.sun_path - 1);
+    ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    ::close(fd);
+    PoseJsonServer server;
+    EXPECT_TRUE(server.start(opt, &err)) << err;
+  }
+  // A regular file is refused and kept.
+  {
+    FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("precious", f);
+    std::fclose(f);
+    PoseJsonServer server;
+    EXPECT_FALSE(server.start(opt, &err));
+    EXPECT_NE(err.find("is not a socket"), std::string::npos) << err;
+    EXPECT_NE(err.find(path), std::string::npos) << err;
+    ASSERT_EQ(::lstat(path.c_str(), &st), 0);
+    EXPECT_EQ(st.st_size, 8);
+    ::unlink(path.c_str());
+  }
+  opt.unix_path = "relative.sock";
+  PoseJsonServer server;
+  EXPECT_FALSE(server.start(opt, &err));
+  EXPECT_NE(err.find("not an absolute path"), std::string::npos) << err;
+  ::rmdir(dir.c_str());
 }

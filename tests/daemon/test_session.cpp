@@ -72,19 +72,6 @@ Counted read_and_check(SessionReader& r) {
   return c;
 }
 
-/// Gives this test process its own mount namespace so test mounts vanish with it.
-bool private_mounts(std::string& why) {
-  if (::unshare(CLONE_NEWNS) != 0) {
-    why = std::string("unshare(CLONE_NEWNS): ") + std::strerror(errno);
-    return false;
-  }
-  if (::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0) {
-    why = std::string("make / private: ") + std::strerror(errno);
-    return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 TEST(Session, RoundTripOfEveryBlockType) {

@@ -107,7 +107,7 @@ TEST(GyroScaleTool, SessionFileGivesEachSensorsScaleAndNamesTheUnspunOne) {
   for (const char* name : {"a", "b", "c"})
     h.sensors.push_back({name, "witmotion", -1, 0});
   std::string error;
-  const std::string path = (dir / "spins.mcap").string();
+  const std::string path = (dir / "spins.mocapses").string();
   auto w = SessionWriter::create(path, h, {}, &error);
   ASSERT_TRUE(w) << error;
   for (const ImuSample& s : spins.samples)

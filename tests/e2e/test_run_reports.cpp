@@ -104,7 +104,7 @@ TEST_F(RunReports, ReplayAndExportPrintTheSameSummary) {
   const Result rep = run({kBin + "mocap", "replay", session, "--csv", path("r.csv"), "--quiet"});
   ASSERT_EQ(rep.code, 0) << rep.err;
   // The golden session holds samples only: export the poses its replay would have recorded.
-  const std::string with_poses = path("p.mcap");
+  const std::string with_poses = path("p.mocapses");
   write_session_with_poses(session, with_poses);
   const Result exp = run({kBin + "mocap", "export", with_poses, "--csv", path("e.csv")});
   ASSERT_EQ(exp.code, 0) << exp.err;

@@ -239,7 +239,7 @@ TEST(Clients, SilentControlClientsDelayNobody) {
   // 1.5 s is less than the 2 s the former one-at-a-time server spent on each silent client.
   const auto t0 = std::chrono::steady_clock::now();
   nlohmann::json start, stop;
-  ASSERT_NO_THROW(start = d.call("record start late.mcap", 1500)) << d.log_text();
+  ASSERT_NO_THROW(start = d.call("record start late.mocapses", 1500)) << d.log_text();
   EXPECT_TRUE(start.value("ok", false)) << start.dump();
   const double waited =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -71,19 +72,19 @@ TEST(Recordings, AnExistingTakeIsNeverOverwrittenAndMocapctlSaysWhy) {
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
   ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
   std::string out;
-  ASSERT_EQ(mocapctl(dir, d.socket(), "record start take1.mcap", out), 0) << out;
+  ASSERT_EQ(mocapctl(dir, d.socket(), "record start take1.mocapses", out), 0) << out;
   std::this_thread::sleep_for(400ms);
   ASSERT_EQ(mocapctl(dir, d.socket(), "record stop", out), 0) << out;
   EXPECT_NE(out.find("frames"), std::string::npos) << out;
-  const std::string before = slurp(dir.file("take1.mcap"));
+  const std::string before = slurp(dir.file("take1.mocapses"));
   ASSERT_GT(before.size(), 1000u);
   // Again with the same name: refused, named, mocapctl exits non-zero, the take is untouched.
-  EXPECT_NE(mocapctl(dir, d.socket(), "record start take1.mcap", out), 0) << out;
-  EXPECT_NE(out.find("take1.mcap"), std::string::npos) << out;
+  EXPECT_NE(mocapctl(dir, d.socket(), "record start take1.mocapses", out), 0) << out;
+  EXPECT_NE(out.find("take1.mocapses"), std::string::npos) << out;
   EXPECT_NE(out.find("already exists"), std::string::npos) << out;
   EXPECT_TRUE(d.status().value("recording", "x").empty());
   std::this_thread::sleep_for(200ms);
-  EXPECT_EQ(slurp(dir.file("take1.mcap")), before);
+  EXPECT_EQ(slurp(dir.file("take1.mocapses")), before);
   EXPECT_EQ(d.quit(), 0) << d.log_text();
 }
 
@@ -96,7 +97,7 @@ TEST(Recordings, NamesCannotLeaveTheRecordingDirectory) {
   const std::string victim = outside.file("victim.txt");
   { std::ofstream(victim) << "precious\n"; }
   // A symlinked file and a symlinked directory inside the recording directory.
-  ASSERT_EQ(::symlink(victim.c_str(), (rec + "/link.mcap").c_str()), 0);
+  ASSERT_EQ(::symlink(victim.c_str(), (rec + "/link.mocapses").c_str()), 0);
   ASSERT_EQ(::symlink(outside.path().c_str(), (rec + "/linkdir").c_str()), 0);
   std::string cfg = base_config(dir, free_tcp_port()) + rig.sensors_toml();
   cfg.replace(cfg.find("directory = \"" + dir.path() + "\""),
@@ -108,12 +109,12 @@ TEST(Recordings, NamesCannotLeaveTheRecordingDirectory) {
     std::string name, expect;
   };
   const std::vector<Case> cases{
-      {"../x.mcap", ".."},
-      {"sub/../../x.mcap", ".."},
-      {outside.file("abs.mcap"), "outside recording.directory"},
+      {"../x.mocapses", ".."},
+      {"sub/../../x.mocapses", ".."},
+      {outside.file("abs.mocapses"), "outside recording.directory"},
       {"/etc/passwd", "outside recording.directory"},
-      {"link.mcap", "link.mcap"},
-      {"linkdir/x.mcap", "linkdir"},
+      {"link.mocapses", "link.mocapses"},
+      {"linkdir/x.mocapses", "linkdir"},
   };
   for (const auto& c : cases) {
     const auto reply = d.call("record start " + c.name);
@@ -123,17 +124,17 @@ TEST(Recordings, NamesCannotLeaveTheRecordingDirectory) {
     EXPECT_TRUE(d.status().value("recording", "x").empty()) << c.name;
   }
   EXPECT_EQ(slurp(victim), "precious\n");
-  EXPECT_FALSE(fs::exists(dir.file("x.mcap")));
-  EXPECT_FALSE(fs::exists(outside.file("x.mcap")));
-  EXPECT_FALSE(fs::exists(outside.file("abs.mcap")));
+  EXPECT_FALSE(fs::exists(dir.file("x.mocapses")));
+  EXPECT_FALSE(fs::exists(outside.file("x.mocapses")));
+  EXPECT_FALSE(fs::exists(outside.file("abs.mocapses")));
   // Inside the directory: relative with a subdirectory, and absolute, both work.
-  for (const std::string& ok_name : {std::string("sub/in.mcap"), rec + "/abs-in.mcap"}) {
+  for (const std::string& ok_name : {std::string("sub/in.mocapses"), rec + "/abs-in.mocapses"}) {
     const auto reply = d.call("record start " + ok_name);
     ASSERT_TRUE(reply.value("ok", false)) << ok_name << ": " << reply.dump();
     EXPECT_TRUE(d.call("record stop").value("ok", false));
   }
-  EXPECT_TRUE(fs::exists(rec + "/sub/in.mcap"));
-  EXPECT_TRUE(fs::exists(rec + "/abs-in.mcap"));
+  EXPECT_TRUE(fs::exists(rec + "/sub/in.mocapses"));
+  EXPECT_TRUE(fs::exists(rec + "/abs-in.mocapses"));
   EXPECT_EQ(d.quit(), 0) << d.log_text();
 }
 
@@ -148,7 +149,8 @@ TEST(Recordings, WithoutANameAFreshTakeNameIsPickedAndStopReportsWhatWasRecorded
     const auto start = d.call("record start");
     ASSERT_TRUE(start.value("ok", false)) << start.dump();
     const std::string file = start.value("file", "");
-    EXPECT_TRUE(std::regex_search(file, std::regex(R"(/take-\d{8}-\d{6}(-\d+)?\.mcap$)"))) << file;
+    EXPECT_TRUE(std::regex_search(file, std::regex(R"(/take-\d{8}-\d{6}(-\d+)?\.mocapses$)")))
+        << file;
     for (const auto& f : files)
       EXPECT_NE(f, file);
     files.push_back(file);
@@ -170,7 +172,7 @@ TEST(Recordings, AutoStartAfterAKillNineKeepsTheCrashedTake) {
   TempDir dir;
   TwoSensorRig rig(dir);
   const std::string cfg =
-      base_config(dir, free_tcp_port(), "auto_start = \"auto.mcap\"\n") + rig.sensors_toml();
+      base_config(dir, free_tcp_port(), "auto_start = \"auto.mocapses\"\n") + rig.sensors_toml();
   uintmax_t crashed_size = 0;
   {
     Daemon d(dir, "auto1", cfg);
@@ -178,18 +180,18 @@ TEST(Recordings, AutoStartAfterAKillNineKeepsTheCrashedTake) {
     ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
     std::this_thread::sleep_for(500ms);
     d.kill9();
-    crashed_size = fs::file_size(dir.file("auto.mcap"));
+    crashed_size = fs::file_size(dir.file("auto.mocapses"));
   }
   ASSERT_GT(crashed_size, 1000u);
-  const std::string crashed = slurp(dir.file("auto.mcap"));
+  const std::string crashed = slurp(dir.file("auto.mocapses"));
   Daemon d(dir, "auto2", cfg);  // as systemd's Restart=on-failure would
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
   const std::string now = d.status().value("recording", "");
-  EXPECT_EQ(fs::path(now).filename(), "auto-2.mcap") << now;
-  EXPECT_EQ(slurp(dir.file("auto.mcap")), crashed);
+  EXPECT_EQ(fs::path(now).filename(), "auto-2.mocapses") << now;
+  EXPECT_EQ(slurp(dir.file("auto.mocapses")), crashed);
   EXPECT_EQ(d.quit(), 0) << d.log_text();
-  EXPECT_EQ(slurp(dir.file("auto.mcap")), crashed);
-  EXPECT_TRUE(fs::exists(dir.file("auto-2.mcap")));
+  EXPECT_EQ(slurp(dir.file("auto.mocapses")), crashed);
+  EXPECT_TRUE(fs::exists(dir.file("auto-2.mocapses")));
 }
 
 namespace {
@@ -222,11 +224,11 @@ TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
   Daemon d(dir, "flip", base_config(dir, free_tcp_port()) + rig.sensors_toml());
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
   ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
-  ASSERT_TRUE(d.call("record start take.mcap").value("ok", false));
+  ASSERT_TRUE(d.call("record start take.mocapses").value("ok", false));
   std::this_thread::sleep_for(1500ms);
   ASSERT_TRUE(d.call("record stop").value("ok", false));
   EXPECT_EQ(d.quit(), 0) << d.log_text();
-  const std::string path = dir.file("take.mcap");
+  const std::string path = dir.file("take.mocapses");
   const Exported original = export_csv(dir, path, "original");
   ASSERT_EQ(original.code, 0) << original.err;
   ASSERT_GT(original.frames, 10u) << original.err;
@@ -254,7 +256,7 @@ TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
   {
     std::string damaged = bytes;
     damaged[mid] = static_cast<char>(damaged[mid] ^ 0x08);
-    const std::string dpath = dir.file("mid.mcap");
+    const std::string dpath = dir.file("mid.mocapses");
     { std::ofstream(dpath, std::ios::binary) << damaged; }
     SessionReader r;
     std::string err;
@@ -282,7 +284,7 @@ TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
   for (const uint64_t at : {uint64_t{3}, uint64_t{17}, uint64_t{100}}) {
     std::string damaged = bytes;
     damaged[at] = static_cast<char>(damaged[at] ^ 0x10);
-    const std::string hpath = dir.file("head.mcap");
+    const std::string hpath = dir.file("head.mocapses");
     { std::ofstream(hpath, std::ios::binary | std::ios::trunc) << damaged; }
     const Exported e = export_csv(dir, hpath, "head");
     EXPECT_EQ(e.code, 0) << at << ": " << e.err;
@@ -295,5 +297,72 @@ TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
       static_cast<unsigned long long>(mid), bytes.size(),
       static_cast<unsigned long long>(block_begin), static_cast<unsigned long long>(block_end),
       static_cast<unsigned long long>(block_end - block_begin),
-      export_csv(dir, dir.file("mid.mcap"), "mid2").frames, original.frames, original.frames);
+      export_csv(dir, dir.file("mid.mocapses"), "mid2").frames, original.frames, original.frames);
+}
+
+// recording.compression = "zstd" in the real mocapd: the take has compressed blocks, exports
+// the same frames as it would uncompressed, and one flipped bit in the middle loses only the
+// compressed block holding it (reported, exit status 3).
+TEST(Recordings, ACompressedTakeExportsAndABitFlipLosesOnlyItsCompressedBlock) {
+  TempDir dir;
+  TwoSensorRig rig(dir);
+  Daemon d(dir, "zstd",
+           base_config(dir, free_tcp_port(), "compression = \"zstd\"\n") + rig.sensors_toml());
+  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
+  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  ASSERT_TRUE(d.call("record start take.mocapses").value("ok", false));
+  std::this_thread::sleep_for(2000ms);
+  const auto stop = d.call("record stop");
+  ASSERT_TRUE(stop.value("ok", false)) << stop.dump();
+  EXPECT_EQ(d.quit(), 0) << d.log_text();
+  const std::string path = dir.file("take.mocapses");
+  EXPECT_EQ(stop.value("bytes", uint64_t{0}), fs::file_size(path)) << stop.dump();
+  const Exported original = export_csv(dir, path, "original");
+  ASSERT_EQ(original.code, 0) << original.err;
+  ASSERT_GT(original.frames, 10u) << original.err;
+  EXPECT_EQ(poses_in(path), stop.value("frames", uint64_t{0}));
+
+  // Which compressed blocks hold how many poses.
+  const std::string bytes = slurp(path);
+  std::map<uint64_t, int> poses_at;
+  uint64_t compressed = 0;
+  {
+    SessionReader r;
+    std::string err;
+    ASSERT_TRUE(r.open(path, &err)) << err;
+    SessionReader::Block b;
+    while (r.next(b))
+      if (b.type == session::BlockType::pose) poses_at[b.offset] += b.inner ? 1 : 0;
+    EXPECT_EQ(r.end(), SessionReader::End::clean);
+    compressed = r.compressed_blocks();
+  }
+  EXPECT_GT(compressed, 0u);
+
+  const uint64_t mid = bytes.size() / 2;
+  std::string damaged = bytes;
+  damaged[mid] = static_cast<char>(damaged[mid] ^ 0x08);
+  const std::string dpath = dir.file("mid.mocapses");
+  { std::ofstream(dpath, std::ios::binary) << damaged; }
+  SessionReader r;
+  std::string err;
+  ASSERT_TRUE(r.open(dpath, &err)) << err;
+  SessionReader::Block b;
+  while (r.next(b)) {
+  }
+  ASSERT_EQ(r.damaged().size(), 1u);
+  const auto& range = r.damaged()[0];
+  EXPECT_LE(range.begin, mid);
+  EXPECT_GT(range.end, mid);
+  EXPECT_LE(range.end - range.begin, 70'000u);  // one block at most
+  const int lost_poses = poses_at.count(range.begin) ? poses_at[range.begin] : 1;
+  const Exported e = export_csv(dir, dpath, "mid");
+  EXPECT_EQ(e.code, 3) << e.err;
+  EXPECT_GE(e.frames + static_cast<size_t>(lost_poses), original.frames) << e.err;
+  EXPECT_GT(e.frames, 0u);
+  std::printf(
+      "[figures] zstd take: %zu bytes, %llu compressed blocks, %zu frames; bit flip at byte "
+      "%llu: %llu bytes skipped (%d poses in them), %zu frames exported\n",
+      bytes.size(), static_cast<unsigned long long>(compressed), original.frames,
+      static_cast<unsigned long long>(mid),
+      static_cast<unsigned long long>(range.end - range.begin), lost_poses, e.frames);
 }

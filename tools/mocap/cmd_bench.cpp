@@ -8,10 +8,10 @@ namespace mocap::cmd {
 void add_bench(CLI::App& app, int& exit_code) {
   CLI::App* b = cli::add_command(app, "bench",
                                  "benchmarks (filter, skeleton, accuracy, latency, capacity, "
-                                 "replay); each prints JSON");
+                                 "replay, record); each prints JSON");
   b->require_subcommand(1);
   for (auto add : {bench::add_filter, bench::add_skeleton, bench::add_accuracy, bench::add_latency,
-                   bench::add_capacity, bench::add_replay})
+                   bench::add_capacity, bench::add_replay, bench::add_record})
     add(*b, exit_code);
 }
 

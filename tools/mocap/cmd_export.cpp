@@ -235,7 +235,7 @@ void add_export(CLI::App& app, int& exit_code) {
   CLI::App* c =
       cli::add_command(app, "export", "convert a recorded session to CSV, BVH, glTF or OpenSim");
   c->footer(kExportUsage);
-  c->add_option("SESSION", o->input, "the recorded session (.mcap)")->required();
+  c->add_option("SESSION", o->input, "the recorded session (.mocapses)")->required();
   CLI::Option* outs[] = {
       c->add_option("--csv", o->csv, "write the poses as CSV to this file (one output per run)"),
       c->add_option("--bvh", o->bvh, "write the poses as BVH to this file (one output per run)"),

@@ -21,7 +21,7 @@ namespace {
 constexpr const char* kUsage =
     "A consumer gyro's scale is off by ~0.5 % per axis, which turns every sensor's heading by a\n"
     "different degree or two in each half turn of the body. Measure it once per sensor: record\n"
-    "(`mocapctl record start spins.mcap`) while each sensor lies on a table with one axis up,\n"
+    "(`mocapctl record start spins.mocapses`) while each sensor lies on a table with one axis up,\n"
     "is turned whole turns by hand (3 are plenty, 10 without a magnetometer; up to ~300 deg/s)\n"
     "and put down again, for each of its three axes, with ~2 s still before and after every\n"
     "spin; putting it back turned is fine (the magnetometer measures the net turn; without one,\n"

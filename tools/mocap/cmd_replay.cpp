@@ -182,7 +182,7 @@ void add_replay(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ReplayCommandOptions>();
   CLI::App* c =
       cli::add_command(app, "replay", "run a session or sample CSV through the pipeline offline");
-  c->add_option("INPUT", o->input, "a session (.mcap) or a CSV of samples")->required();
+  c->add_option("INPUT", o->input, "a session (.mocapses) or a CSV of samples")->required();
   CLI::Option* config = c->add_option(
       "--config", o->config,
       "rig configuration (TOML); default: the recorded one, or segment-named sensors");

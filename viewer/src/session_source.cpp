@@ -34,7 +34,7 @@ SessionSource::SessionSource(const std::string& path) {
   while (reader_.next(b)) {
     if (b.type != session::BlockType::pose) continue;
     if (!index_.empty() && b.pose.t_ns < index_.back().t_ns) continue;  // never back in time
-    index_.push_back({b.pose.t_ns, b.offset});
+    index_.push_back({b.pose.t_ns, b.offset, b.inner});
     if (!have_dims) {
       dims_ = body_dimensions_from_height(body_height_from_pose(b.pose, 1.75));
       have_dims = true;
@@ -67,7 +67,8 @@ bool SessionSource::poll(double t_s, std::vector<PoseFrame>& frames) {
   const int k = frame_at(advance(t_s));
   if (k == shown_ && !frames.empty()) return false;
   SessionReader::Block b;
-  if (!reader_.seek(index_[k].offset) || !reader_.next(b) || b.type != session::BlockType::pose)
+  if (!reader_.seek(index_[k].offset, index_[k].inner) || !reader_.next(b) ||
+      b.type != session::BlockType::pose)
     return false;  // the file changed under us: keep showing the last frame
   frames.resize(1);
   frames[0] = b.pose;

@@ -7,6 +7,8 @@ namespace mocap {
 
 /// CLOCK_MONOTONIC now, in ns.
 int64_t monotonic_ns();
+/// CLOCK_REALTIME in ns since 1970-01-01 UTC (wall clock: may step; never for intervals).
+int64_t realtime_ns();
 
 /// Seconds to ns and back (double).
 constexpr int64_t s_to_ns(double s) {

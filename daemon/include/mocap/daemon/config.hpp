@@ -94,6 +94,9 @@ struct JsonOutputConfig {
   std::string bind = "127.0.0.1";
   int port = 7301;
   int max_clients = 32;  ///< further connections are closed at once
+  /// Private stream: serve it on this Unix socket (mode 0600, only the daemon's user) instead of
+  /// TCP (bind/port unused). "" = TCP.
+  std::string unix_socket;
 };
 
 struct VmcOutputConfig {
@@ -132,6 +135,9 @@ struct RecordingConfig {
   bool samples = true;          ///< store decoded samples
   bool poses = true;            ///< store published pose frames
   std::string auto_start;       ///< file to start recording into at startup ("" = none)
+  // Block compression on the recorder's writer thread (docs/session-format.md).
+  std::string compression = "none";  ///< "none" | "zstd"
+  int compression_level = 3;         ///< zstd level 1..19
 };
 
 struct DaemonSection {

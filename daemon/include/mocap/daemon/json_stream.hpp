@@ -34,6 +34,10 @@ class PoseJsonServer {
   struct Options {
     std::string bind_address = "127.0.0.1";  ///< IPv4 address to listen on (loopback default)
     uint16_t port = 0;                       ///< 0 = pick a free port (see port())
+    /// Non-empty: listen on this Unix socket path instead of TCP, created mode 0600 (only this
+    /// user can connect); an absolute path. A stale socket is replaced; a live one (another
+    /// process listening) or any other file there is an error. Removed by stop().
+    std::string unix_path;
     int max_clients = 32;  ///< further connections evict a stalled client or are closed at once
     std::size_t client_buffer_bytes = 256 * 1024;  ///< per-client queue of whole lines
     std::size_t max_client_input_bytes = 4096;     ///< a client sending more is dropped
@@ -59,7 +63,7 @@ class PoseJsonServer {
   /// Binds, listens and starts the I/O thread. On failure returns false with a message
   /// naming the address and the system error.
   bool start(const Options& options, std::string* error);
-  /// The TCP port actually listened on (after start()).
+  /// The TCP port actually listened on (after start(); 0 on a Unix socket).
   uint16_t port() const { return port_; }
   /// Pipeline thread (single producer): formats the frame and hands it over. Never blocks,
   /// never allocates. Returns false if the frame was dropped (hand-off full or not started).
@@ -69,6 +73,11 @@ class PoseJsonServer {
   void stop();
 
  private:
+  /// Creates listen_fd_ on options_.unix_path (mode 0600); false with a message.
+  bool listen_unix(std::string* error);
+  /// Allocates the hand-off and client tables and starts the I/O thread.
+  bool start_io();
+  bool unix_bound_ = false;  ///< options_.unix_path is ours to remove
   struct Slot {
     std::size_t len = 0;
     char data[kPoseJsonMaxLine];

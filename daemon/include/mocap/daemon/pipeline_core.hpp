@@ -63,6 +63,12 @@ class PipelineCore {
   void reset_heading() { engine_.reset_heading(); }
   /// Frame-level flags the pipeline does not own (recording, replay, demo).
   void set_frame_flag(uint32_t flag, bool on);
+  /// CLOCK_REALTIME minus the samples' clock (ns): frames then carry t_unix_ns = t_ns + this.
+  /// Live: sampled by the pipeline thread; replay: the recorded offset. Unset: t_unix_ns = 0.
+  void set_unix_offset_ns(int64_t offset_ns) {
+    unix_offset_ns_ = offset_ns;
+    unix_offset_known_ = true;
+  }
 
   /// Counters from outside the pipeline thread's view (device decoders, ring overflows).
   void set_external_counters(int sensor, uint32_t drops, uint32_t errors);
@@ -98,6 +104,8 @@ class PipelineCore {
   uint64_t frame_no_ = 0, samples_ = 0, rejected_ = 0;
   int64_t newest_t_ns_ = 0;
   int64_t published_t_ns_ = INT64_MIN;  ///< time of the last frame published
+  int64_t unix_offset_ns_ = 0;
+  bool unix_offset_known_ = false;
   int64_t period_ns_;
   int64_t next_frame_ns_ = INT64_MIN;
   uint32_t extra_flags_ = 0;

@@ -32,6 +32,11 @@ class PrefetchSource final : public SampleSource {
   const std::string& error() const override { return error_; }
   double progress() const override { return progress_.load(std::memory_order_relaxed); }
   std::string calibration_text() const override { return calibration_text_; }
+  /// The inner source's offset as it stood when the current chunk was read.
+  bool unix_offset_ns(int64_t& out) const override {
+    out = current_offset_ns_;
+    return current_offset_known_;
+  }
 
  private:
   void run();
@@ -41,11 +46,15 @@ class PrefetchSource final : public SampleSource {
   std::mutex mu_;
   std::condition_variable cv_;
   std::deque<std::vector<ImuSample>> ready_;   // guarded by mu_
+  std::deque<int64_t> ready_offsets_;          // guarded by mu_: unix offset per ready chunk
+  bool offset_known_ = false;                  // set before the thread starts
   std::vector<std::vector<ImuSample>> spare_;  // guarded by mu_: emptied chunks for reuse
   bool done_ = false, stop_ = false;           // guarded by mu_
   std::string inner_error_;                    // guarded by mu_, set before done_
   std::vector<ImuSample> current_;             // consumer only
   std::size_t pos_ = 0;                        // consumer only
+  int64_t current_offset_ns_ = 0;              // consumer only
+  bool current_offset_known_ = false;          // consumer only
   std::string error_;                          // consumer only
   std::atomic<double> progress_{0};
   std::thread thread_;

@@ -8,7 +8,7 @@
 
 namespace mocap::daemon {
 
-inline constexpr const char* kSessionExtension = "mcap";
+inline constexpr const char* kSessionExtension = "mocapses";
 
 /// A freshly created, empty recording file.
 struct RecordingFile {
@@ -19,11 +19,11 @@ struct RecordingFile {
 };
 
 /// The fresh default name for a recording started at `now` (local time):
-/// take-YYYYMMDD-HHMMSS.mcap.
+/// take-YYYYMMDD-HHMMSS.mocapses.
 std::string default_take_name(std::time_t now);
 
 /// Creates a new recording file for `name` under `directory`:
-/// - `name` empty: take-YYYYMMDD-HHMMSS.mcap, with -2, -3, ... before the extension if taken;
+/// - `name` empty: take-YYYYMMDD-HHMMSS.mocapses, with -2, -3, ... before the extension if taken;
 /// - otherwise `name` relative to `directory` (an absolute name must lie inside it); `..`
 ///   components, symlinks and names outside the directory are refused;
 /// - an existing file is an error naming it, unless `unique` (auto_start): then the first free

@@ -31,6 +31,9 @@ class SampleSource {
   virtual double progress() const = 0;
   /// Calibration text stored with the input ("" if none).
   virtual std::string calibration_text() const { return {}; }
+  /// CLOCK_REALTIME minus the samples' clock when they were recorded, in force at the last
+  /// sample returned (sessions record it); false if unknown (CSV).
+  virtual bool unix_offset_ns(int64_t& /*out*/) const { return false; }
 };
 
 enum class SessionSource { automatic, raw, samples };

@@ -38,10 +38,28 @@ inline constexpr std::size_t kMaxBlockPayload = kRawPrefixBytes + kMaxRawChunk;
 /// header_copy (4): a copy of the file header (all its bytes, magic to CRC) in one or more
 /// blocks right after it, so a damaged header is recovered from them. Readers that do not know
 /// the type skip it (checksum-valid unknown blocks are skipped by every version-1 reader).
-enum class BlockType : uint8_t { raw = 1, sample = 2, pose = 3, header_copy = 4 };
+/// compressed (5): a run of whole ordinary blocks (each with its sync marker and CRC) compressed
+/// together into one zstd frame, by the writer thread when recording.compression = "zstd".
+/// clock (6): the wall clock beside the monotonic one, written by the writer thread.
+enum class BlockType : uint8_t {
+  raw = 1,
+  sample = 2,
+  pose = 3,
+  header_copy = 4,
+  compressed = 5,
+  clock = 6
+};
 /// header_copy payload prefix: u32 total header bytes, u32 offset of this chunk.
 inline constexpr std::size_t kHeaderCopyPrefixBytes = 8;
 inline constexpr std::size_t kHeaderCopyChunk = kMaxBlockPayload - kHeaderCopyPrefixBytes;
+
+/// compressed payload: u32 length of the blocks it holds once decompressed (<= kMaxGroupBytes),
+/// then one zstd frame of them.
+inline constexpr std::size_t kCompressedPrefixBytes = 4;
+inline constexpr std::size_t kMaxGroupBytes = 256u * 1024;
+/// clock payload: i64 t_host_ns (CLOCK_MONOTONIC), i64 t_unix_ns (CLOCK_REALTIME), sampled back
+/// to back.
+inline constexpr std::size_t kClockPayloadBytes = 16;
 
 /// One sensor of the rig as recorded in the header.
 struct SensorDescription {

@@ -2,8 +2,9 @@
 // versions and foreign files with a clear message; recovers a damaged header from its copy
 // (header_copy blocks); skips a damaged block by resynchronising on the next valid one (sync
 // marker, length, CRC, decodes) and reports each damaged range (bytes and time span); a torn
-// tail ends reading. Lengths are checked against the format's limits before anything is
-// allocated.
+// tail ends reading. Compressed blocks (zstd) are unpacked and their blocks delivered one by one;
+// clock blocks update the wall-clock offset (unix_offset_ns()). Lengths are checked against the
+// format's limits before anything is allocated.
 #pragma once
 
 #include <cstdint>
@@ -22,10 +23,12 @@ class SessionReader {
   /// reader's buffer and stays valid until the next call to next().
   struct Block {
     session::BlockType type = session::BlockType::raw;
-    uint64_t offset = 0;        ///< file offset of the block
+    uint64_t offset = 0;  ///< file offset of the block (or of the compressed block holding it)
+    uint32_t inner = 0;   ///< inside a compressed block: 1 + its offset there; else 0
     uint16_t device_index = 0;  ///< raw
     int64_t t_host_ns = 0;      ///< raw
     std::span<const uint8_t> raw;
+    int64_t t_unix_ns = 0;  ///< clock: CLOCK_REALTIME at t_host_ns (internal: next() absorbs it)
     ImuSample sample;
     PoseFrame pose;
   };
@@ -58,9 +61,15 @@ class SessionReader {
   /// Reads the next block; false at the end of the good data (see end(), tail_offset()).
   bool next(Block& block);
 
-  /// Continues reading at `offset`, the offset of a block returned earlier by next() (random
+  /// Continues reading at a block returned earlier by next(): its `offset` and `inner` (random
   /// access for playback). False, and nothing changes, if it lies outside the file's blocks.
-  bool seek(uint64_t offset);
+  bool seek(uint64_t offset, uint32_t inner = 0);
+
+  /// CLOCK_REALTIME minus CLOCK_MONOTONIC (ns) as last recorded before the block just read:
+  /// from the header, then from each clock block. unix time of a block = t_host_ns + this.
+  int64_t unix_offset_ns() const { return unix_offset_ns_; }
+  /// Compressed blocks unpacked so far.
+  uint64_t compressed_blocks() const { return compressed_blocks_; }
 
   End end() const { return end_; }
   /// While reading: the offset of the next block; at the end: the first byte after the last
@@ -91,6 +100,15 @@ class SessionReader {
   std::size_t read_at(uint64_t offset, uint8_t* dst, std::size_t n);
   /// Reads and checks the block at `at`; on bad: `end_kind` (torn or corrupt) and `why`.
   Parse parse_at(uint64_t at, Block& block, uint64_t& block_end, End& end_kind, std::string& why);
+  /// Decodes a payload of a known type into block (block.type set); false if it does not.
+  bool decode_payload(std::span<const uint8_t> payload, Block& block);
+  /// Unpacks a compressed block's payload into group_; false (with why) if it does not.
+  bool unpack(std::span<const uint8_t> payload, std::string& why);
+  std::size_t unpacked_len_ = 0;  ///< bytes in group_ after the last unpack()
+  /// Bookkeeping for a good block (time, open damage, clock); false if it is not delivered.
+  bool deliver(const Block& block);
+  /// Reads the block at group_pos_ in group_ (ok, skip: unknown type, bad: damaged).
+  Parse next_inner(Block& block);
   /// The offset of the next valid block after `from` (UINT64_MAX if none).
   uint64_t resync(uint64_t from, Block& scratch, uint64_t limit);
 
@@ -109,7 +127,13 @@ class SessionReader {
   bool damage_open_ = false;  ///< damaged_.back() waits for its t_after_ns
   int64_t last_t_ns_ = -1;    ///< host time of the last good block
   std::string header_damage_;
-  std::vector<uint8_t> scan_;  ///< resync window
+  std::vector<uint8_t> scan_;   ///< resync window
+  std::vector<uint8_t> group_;  ///< an unpacked compressed block
+  std::size_t group_len_ = 0, group_pos_ = 0;
+  uint64_t group_offset_ = 0, group_end_ = 0;  ///< the compressed block's file range
+  uint64_t compressed_blocks_ = 0;
+  int64_t unix_offset_ns_ = 0;
+  void* dctx_ = nullptr;  ///< ZSTD_DCtx
 };
 
 }  // namespace mocap

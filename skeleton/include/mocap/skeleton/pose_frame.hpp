@@ -62,6 +62,10 @@ struct PoseFrame {
   uint32_t sensor_count = 0;    ///< valid entries in sensors
   float calib_countdown_s = 0;  ///< seconds until calibration capture (while calibrating)
   float reserved = 0;
+  /// Wall-clock time of t_ns: UTC ns since 1970 (CLOCK_REALTIME sampled beside the monotonic
+  /// clock live, the recorded offset in a replay); 0 = unknown (e.g. a CSV replay). Not stored
+  /// in session pose blocks (sessions keep the offset in their header and clock blocks).
+  int64_t t_unix_ns = 0;
   /// Earth-frame (ENU) orientation of each segment, w, x, y, z: maps segment-frame vectors into
   /// the earth frame; identity for a segment in the reference pose facing +x (east).
   std::array<std::array<float, 4>, kSegmentCount> q_earth_segment{};

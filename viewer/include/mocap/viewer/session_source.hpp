@@ -30,7 +30,8 @@ class SessionSource final : public PlaybackSource {
  private:
   struct Entry {
     int64_t t_ns;     ///< the pose's timestamp
-    uint64_t offset;  ///< its block in the file
+    uint64_t offset;  ///< its block in the file (or the compressed block holding it)
+    uint32_t inner;   ///< SessionReader::Block::inner (0: not in a compressed block)
   };
   std::string name_;
   SessionReader reader_;
