@@ -24,6 +24,14 @@ std::vector<SensorInfo> sensor_infos(const Config& cfg) {
   return out;
 }
 
+size_t device_leader(const Config& cfg, size_t i) {
+  const SensorConfig& s = cfg.sensors.at(i);
+  if (s.driver != "slimevr") return i;
+  for (size_t j = 0; j < i; ++j)
+    if (cfg.sensors[j].driver == "slimevr" && cfg.sensors[j].port == s.port) return j;
+  return i;
+}
+
 DeviceSpec device_spec(const Config& cfg, size_t i) {
   const SensorConfig& s = cfg.sensors.at(i);
   DeviceSpec d;
@@ -43,6 +51,18 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
   d.axis_remap = s.axis_remap;
   d.options = s.options;
   d.realtime_priority = cfg.pipeline.realtime_priority;
+  if (s.driver == "slimevr" && device_leader(cfg, i) == i) {
+    // One socket for every tracker on this port: MAC/SENSOR=INDEX for each member.
+    std::string map;
+    for (size_t j = i; j < cfg.sensors.size(); ++j) {
+      if (cfg.sensors[j].driver != "slimevr" || device_leader(cfg, j) != i) continue;
+      const auto& o = cfg.sensors[j].options;
+      const auto mac = o.find("mac"), id = o.find("tracker");
+      map += (map.empty() ? "" : ",") + (mac == o.end() ? std::string("?") : mac->second) + "/" +
+             (id == o.end() ? std::string("0") : id->second) + "=" + std::to_string(j);
+    }
+    d.options["trackers"] = map;
+  }
   return d;
 }
 
@@ -73,6 +93,7 @@ void Daemon::start() {
     s->start(*pipeline_);
   if (parts_.device_factory) {
     for (size_t i = 0; i < cfg_.sensors.size(); ++i) {
+      if (device_leader(cfg_, i) != i) continue;  // a SlimeVR tracker: its port's device
       const auto& s = cfg_.sensors[i];
       auto dev = parts_.device_factory(device_spec(cfg_, i),
                                        log_.child(s.name, log_level_of(s.log_level)));
@@ -120,7 +141,8 @@ void Daemon::update_device_counters() {
   for (size_t i = 0; i < devices_.size(); ++i) {
     const DeviceStats st = devices_[i]->stats();
     pipeline_->set_device_counters(
-        static_cast<int>(i), static_cast<uint32_t>(st.decoder.dropped_samples),
+        static_cast<int>(devices_[i]->spec().device_index),
+        static_cast<uint32_t>(st.decoder.dropped_samples),
         static_cast<uint32_t>(st.decoder.checksum_errors + st.decoder.resyncs));
   }
 }

@@ -113,7 +113,7 @@ CalibrationProgress RigEngine::calibration_progress() const {
 SensorFilterState RigEngine::sensor_state(int i) const {
   SensorFilterState st;
   const AttitudeFilter& f = tracker_.filter(i);
-  st.initialised = f.counters().gyr_ok > 0;
+  st.initialised = f.counters().gyr_ok > 0 || tracker_.orientation_source(i);
   st.at_rest = f.at_rest();
   st.mag_disturbed = cfg_.filter.use_mag && f.mag_disturbed();
   st.mag_no_reference = cfg_.filter.use_mag && f.mag_no_reference();
