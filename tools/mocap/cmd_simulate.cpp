@@ -4,24 +4,28 @@
 #include <signal.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <string>
 
 #include "commands.hpp"
 #include "mocap/core/cli_args.hpp"
 #include "mocap/devsim/sim_device.hpp"
+#include "mocap/devsim/sim_slimevr.hpp"
 
 namespace mocap::cmd {
 
 namespace {
 
 constexpr const char* kSimulateUsage =
-    "usage: mocap simulate --protocol witmotion|xbus|ds4|dualsense|joycon|line\n"
+    "usage: mocap simulate --protocol witmotion|xbus|ds4|dualsense|joycon|line|slimevr\n"
     "                      (--pty [--link PATH] | --udp HOST:PORT | --out FILE --samples N)\n"
     "                      [--motion static|rotate|FILE.csv] [--rate HZ] [--option KEY=VALUE]...\n"
     "  --pty prints the slave path (\"pty: /dev/pts/N\") and runs until interrupted.\n"
     "  --out writes a capture: the byte stream, or for HID protocols each report prefixed by\n"
-    "  one length byte (the format the fuzz corpora and report-byte tests use).\n";
+    "  one length byte (the format the fuzz corpora and report-byte tests use).\n"
+    "  slimevr: a tracker board speaking to the server at --udp HOST:PORT (handshake, then\n"
+    "  rotation + acceleration); --option mac=AA:BB:CC:DD:EE:FF, --option sensors=N (IMUs).\n";
 
 bool parse_kv(const std::vector<std::string>& items, std::map<std::string, std::string>& out) {
   for (const auto& kv : items) {
@@ -76,11 +80,52 @@ int write_capture(const std::string& protocol, const std::string& motion_spec, d
   return 0;
 }
 
+/// A SlimeVR tracker board: its own connection logic over UDP (not SimulatedDevice's one-way
+/// stream), until the duration passes or a stop signal arrives.
+int run_slimevr(const SimOptions& so, double duration, sigset_t& stop_signals) {
+  if (so.udp.empty()) {
+    std::fprintf(stderr, "mocap simulate: slimevr trackers talk UDP: give --udp HOST:PORT\n");
+    return 2;
+  }
+  SimSlimeOptions o;
+  o.server = so.udp;
+  o.rate_hz = so.rate_hz;
+  o.motion = so.motion;
+  for (const auto& [k, v] : so.options) {
+    if (k == "mac") {
+      o.mac = v;
+    } else if (k == "sensors") {
+      o.sensors = std::atoi(v.c_str());
+    } else {
+      std::fprintf(stderr, "mocap simulate: slimevr has no option '%s' (mac, sensors)\n",
+                   k.c_str());
+      return 2;
+    }
+  }
+  SimSlimeTracker t(o);
+  std::printf("udp: slimevr tracker %s (%d sensors) to %s\n", o.mac.c_str(), o.sensors,
+              o.server.c_str());
+  std::fflush(stdout);
+  t.start();
+  timespec ts{static_cast<time_t>(duration),
+              static_cast<long>((duration - static_cast<time_t>(duration)) * 1e9)};
+  if (duration > 0)
+    sigtimedwait(&stop_signals, nullptr, &ts);
+  else
+    sigwaitinfo(&stop_signals, nullptr);
+  t.stop();
+  std::fprintf(stderr, "mocap simulate: sent %llu samples per sensor (%s, %llu handshakes)\n",
+               static_cast<unsigned long long>(t.samples()),
+               t.connected() ? "connected" : "never answered",
+               static_cast<unsigned long long>(t.handshakes()));
+  return 0;
+}
+
 }  // namespace
 
 int run_simulate(int argc, char** argv) {
   CliArgs args;
-  args.option("protocol", "witmotion|xbus|ds4|dualsense|joycon|line")
+  args.option("protocol", "witmotion|xbus|ds4|dualsense|joycon|line|slimevr")
       .flag("pty", "emit on a new pseudo-terminal")
       .option("link", "with --pty: also make a stable symlink at PATH")
       .option("udp", "send datagrams to HOST:PORT")
@@ -137,6 +182,7 @@ int run_simulate(int argc, char** argv) {
     sigaddset(&stop_signals, SIGINT);
     sigaddset(&stop_signals, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+    if (so.protocol == "slimevr") return run_slimevr(so, duration, stop_signals);
     SimulatedDevice sim(so);
     if (so.udp.empty())
       std::printf("pty: %s\n", sim.path().c_str());
