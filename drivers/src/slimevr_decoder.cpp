@@ -151,6 +151,10 @@ void SlimeVrDecoder::feed(std::span<const uint8_t> record, int64_t t_host_ns, Sa
   ++stats_.frames;
   for (std::size_t i = 0; i < n; ++i)
     handle(bi, packets_[i], t_host_ns, sink);
+  if (packets_[0].type == sv::kHandshake && b.hello) {
+    b.hello_len = std::min(record.size(), b.hello_record.size());
+    std::copy_n(record.begin(), b.hello_len, b.hello_record.begin());
+  }
   for (Sensor& s : sensors_)
     if (s.board == bi && s.new_quat) emit(s, t_host_ns, sink);
 }

@@ -62,6 +62,14 @@ class SlimeVrDecoder final : public ProtocolDecoder {
   std::span<const Reply> pending_replies() const { return {replies_.data(), n_replies_}; }
   void clear_replies() { n_replies_ = 0; }
   std::vector<SlimeBoardInfo> boards() const;
+  /// Calls f(record) with each known board's handshake record as it arrived (address
+  /// included). The device records them again now and then, so a recording started after the
+  /// boards connected still names them when its raw datagrams replay through this decoder.
+  template <class F>
+  void each_hello_record(F&& f) const {
+    for (const Board& b : boards_)
+      if (b.used && b.hello && b.hello_len > 0) f(std::span(b.hello_record.data(), b.hello_len));
+  }
   int64_t timeout_ns = 3'000'000'000;
 
  private:
@@ -78,6 +86,8 @@ class SlimeVrDecoder final : public ProtocolDecoder {
     int64_t last_heard_ns = 0, last_heartbeat_ns = 0, last_ping_ns = 0;
     uint64_t heartbeat_number = 0;
     float battery_level = -1;
+    std::array<uint8_t, 256> hello_record{};
+    std::size_t hello_len = 0;
   };
   struct Sensor {
     SlimeMapping map;

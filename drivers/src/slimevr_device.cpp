@@ -31,6 +31,7 @@ namespace {
 
 constexpr int kTickMs = 100;
 constexpr int kRetryMs = 500;
+constexpr int64_t kHelloRecordNs = 250'000'000;  // boards' handshakes re-recorded this often
 
 /// A bound IPv4 UDP socket (broadcast-capable, address reusable so `mocap devices` can listen
 /// beside a running mocapd). -1 + err on failure.
@@ -160,6 +161,13 @@ class SlimeVrDevice final : public Device {
       if (now - last_tick_ns_ >= int64_t{kTickMs} * 1'000'000) {
         last_tick_ns_ = now;
         dec_.tick(now, sink);
+        if (now - last_hello_ns_ >= kHelloRecordNs) {
+          last_hello_ns_ = now;
+          // Into the recording only (not decoded again here): a take started later still has
+          // each board's handshake before its data, so raw replay knows the boards' MACs.
+          dec_.each_hello_record(
+              [&](std::span<const uint8_t> rec) { sink.on_raw(spec_.device_index, now, rec); });
+        }
         const auto boards = dec_.boards();
         if (boards.size() != known_boards) {
           for (const auto& b : boards)
@@ -182,7 +190,7 @@ class SlimeVrDevice final : public Device {
   Wakeup wake_;
   std::thread thread_;
   std::atomic<bool> stop_{false};
-  int64_t last_tick_ns_ = 0;
+  int64_t last_tick_ns_ = 0, last_hello_ns_ = 0;
   std::string last_error_;
   mutable std::mutex mu_;
   DeviceStats stats_;
