@@ -33,8 +33,8 @@ constexpr int kTickMs = 100;
 constexpr int kRetryMs = 500;
 constexpr int64_t kHelloRecordNs = 250'000'000;  // boards' handshakes re-recorded this often
 
-/// A bound IPv4 UDP socket (broadcast-capable, address reusable so `mocap devices` can listen
-/// beside a running mocapd). -1 + err on failure.
+/// A bound IPv4 UDP socket (broadcast-capable). Not SO_REUSEADDR: a second socket on the port
+/// would take unicast datagrams from the first, so a busy port is an error. -1 + err on failure.
 int bind_udp4(const std::string& host_port, std::string& err) {
   std::string host, port;
   if (!split_host_port(host_port, host, port, err)) return -1;
@@ -51,7 +51,6 @@ int bind_udp4(const std::string& host_port, std::string& err) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   const int one = 1;
   if (fd >= 0) {
-    ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
     ::setsockopt(fd, SOL_SOCKET, SO_BROADCAST, &one, sizeof one);
   }
   if (fd < 0 || ::bind(fd, res->ai_addr, res->ai_addrlen) != 0) {

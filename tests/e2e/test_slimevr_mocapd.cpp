@@ -181,3 +181,29 @@ TEST(SlimeVrMocapd, TrackersConnectStreamCalibrateByButtonRecordAndReplay) {
   EXPECT_EQ(poses[0].find("nan"), std::string::npos);
   fs::remove_all(dir);
 }
+
+// `mocap devices` lists a tracker that is saying hello (not yet answered) with its rig snippet.
+TEST(SlimeVrMocapd, DevicesListsTrackersThatSayHello) {
+  const int udp = free_loopback_port(SOCK_DGRAM);
+  mocap::SimSlimeOptions o;
+  o.server = "127.0.0.1:" + std::to_string(udp);
+  o.mac = "02:5E:00:00:AB:CD";
+  mocap::SimSlimeTracker board(o);
+  const fs::path out_file =
+      fs::temp_directory_path() / ("mocap-e2e-slime-devices-" + std::to_string(getpid()));
+  const pid_t p = spawn({kBinDir + "mocap", "devices", "--slimevr-port", std::to_string(udp),
+                         "--slimevr-listen", "2.5"},
+                        out_file.string());
+  std::this_thread::sleep_for(300ms);  // the listener binds first
+  board.start();
+  EXPECT_EQ(wait_exit(p), 0);
+  board.stop();
+  const std::string out = slurp(out_file.string());
+  EXPECT_NE(out.find("tracker 02:5E:00:00:AB:CD at 127.0.0.1"), std::string::npos) << out;
+  EXPECT_NE(out.find("firmware \"0.6.0-sim\", protocol 22"), std::string::npos) << out;
+  EXPECT_NE(out.find("options = { mac = \"02:5E:00:00:AB:CD\", tracker = 0 }"), std::string::npos)
+      << out;
+  EXPECT_FALSE(board.connected());  // listening answers nothing
+  fs::remove(out_file);
+  fs::remove(out_file.string() + ".err");
+}

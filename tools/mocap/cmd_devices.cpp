@@ -1,5 +1,6 @@
 // mocap devices: lists connected serial, HID and USB devices that match a known driver, with the
-// rig-config snippet to use each; --watch prints USB attach/detach events (libusb hot-plug).
+// rig-config snippet to use each, and the SlimeVR trackers heard saying hello on UDP 6969;
+// --watch prints USB attach/detach events (libusb hot-plug).
 #include <signal.h>
 
 #include <cstdio>
@@ -7,20 +8,57 @@
 #include "commands.hpp"
 #include "mocap/core/cli_args.hpp"
 #include "mocap/drivers/known_devices.hpp"
+#include "mocap/drivers/slimevr_listen.hpp"
 
 namespace mocap::cmd {
+
+namespace {
+
+/// The SlimeVR boards heard saying hello (handshake broadcasts of trackers not yet connected),
+/// each with the rig snippet of its main IMU.
+void list_slimevr(int port, double seconds) {
+  std::string err;
+  const std::string addr = "0.0.0.0:" + std::to_string(port);
+  const auto hellos = listen_slimevr_hellos(addr, static_cast<int>(seconds * 1000), err);
+  if (!err.empty()) {
+    std::printf(
+        "# SlimeVR: cannot listen on udp %s (%s); if mocapd runs there, `mocapctl "
+        "status` shows its trackers\n",
+        addr.c_str(), err.c_str());
+    return;
+  }
+  if (hellos.empty())
+    std::printf("# SlimeVR: no tracker said hello on udp %s in %.1f s\n", addr.c_str(), seconds);
+  for (const auto& h : hellos) {
+    std::printf(
+        "# slimevr: tracker %s at %s (board %u, IMU %u, MCU %u, firmware \"%s\", protocol %u)\n",
+        h.mac.c_str(), h.ip.c_str(), h.board, h.imu, h.mcu, h.firmware.c_str(), h.protocol_version);
+    std::printf(
+        "[[sensor]]\nname = \"slime_%s\"\ndriver = \"slimevr\"\nport = \"udp:%s\"\n"
+        "segment = \"pelvis\"  # choose the body segment\n"
+        "options = { mac = \"%s\", tracker = 0 }  # tracker = 1: the extension IMU\n\n",
+        h.mac.substr(12, 2).append(h.mac.substr(15, 2)).c_str(), addr.c_str(), h.mac.c_str());
+  }
+}
+
+}  // namespace
 
 int run_devices(int argc, char** argv) {
   CliArgs args;
   args.flag("watch", "after listing, print USB attach/detach of known devices until interrupted")
       .flag("known", "print the table of known USB ids")
+      .option("slimevr-listen",
+              "seconds to listen for SlimeVR trackers' hello (default 1.5, 0 = no)")
+      .option("slimevr-port", "UDP port of the SlimeVR trackers' hello (default 6969)")
       .flag("help", "show this help");
   if (!args.parse(argc, argv)) {
     std::fprintf(stderr, "mocap devices: %s\n%s", args.error().c_str(), args.help().c_str());
     return 2;
   }
   if (args.has("help")) {
-    std::printf("usage: mocap devices [--watch] [--known]\n%s", args.help().c_str());
+    std::printf(
+        "usage: mocap devices [--watch] [--known] [--slimevr-listen S] [--slimevr-port P]\n%s",
+        args.help().c_str());
     return 0;
   }
   if (args.has("known")) {
@@ -49,6 +87,17 @@ int run_devices(int argc, char** argv) {
     if (proto == "xbus") std::printf("baud = 115200\n");
     std::printf("segment = \"pelvis\"  # choose the body segment\n\n");
   }
+  double listen_s = 1.5;
+  long slime_port = 6969;
+  if ((args.has("slimevr-listen") &&
+       (!args.get_double("slimevr-listen", listen_s) || listen_s < 0 || listen_s > 600)) ||
+      (args.has("slimevr-port") &&
+       (!args.get_int("slimevr-port", slime_port) || slime_port < 1 || slime_port > 65535))) {
+    std::fprintf(stderr,
+                 "mocap devices: --slimevr-listen takes 0..600 s, --slimevr-port 1..65535\n");
+    return 2;
+  }
+  if (listen_s > 0) list_slimevr(static_cast<int>(slime_port), listen_s);
   if (!args.has("watch")) return 0;
   sigset_t stop;
   sigemptyset(&stop);

@@ -1,6 +1,7 @@
 // Finding SlimeVR trackers on the network (`mocap devices`): listen on the trackers' UDP port
 // for a while and report the boards whose handshake broadcast was heard. Passive: nothing is
-// answered, so a running mocapd (which shares the port) keeps its trackers.
+// answered. The port cannot be shared: while mocapd listens on it, this fails (its status
+// names the connected trackers).
 #pragma once
 
 #include <cstdint>
