@@ -58,8 +58,9 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
       if (cfg.sensors[j].driver != "slimevr" || device_leader(cfg, j) != i) continue;
       const auto& o = cfg.sensors[j].options;
       const auto mac = o.find("mac"), id = o.find("tracker");
-      map += (map.empty() ? "" : ",") + (mac == o.end() ? std::string("?") : mac->second) + "/" +
-             (id == o.end() ? std::string("0") : id->second) + "=" + std::to_string(j);
+      map += (map.empty() ? "" : ";") + (mac == o.end() ? std::string("?") : mac->second) + "/" +
+             (id == o.end() ? std::string("0") : id->second) + "=" + std::to_string(j) + "@" +
+             cfg.sensors[j].axis_remap;
     }
     d.options["trackers"] = map;
   }

@@ -36,11 +36,15 @@ std::vector<SlimeMapping> slime_mappings(const DeviceSpec& spec) {
   if (!trackers.empty()) {
     std::string_view rest = trackers;
     while (!rest.empty()) {
-      const auto comma = rest.find(',');
-      const std::string_view item = rest.substr(0, comma);
-      rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
-      const auto slash = item.find('/'), eq = item.find('=');
+      const auto semi = rest.find(';');
+      std::string_view item = rest.substr(0, semi);
+      rest = semi == std::string_view::npos ? std::string_view{} : rest.substr(semi + 1);
       SlimeMapping m;
+      if (const auto at = item.find('@'); at != std::string_view::npos) {
+        m.axis_remap = std::string(item.substr(at + 1));
+        item = item.substr(0, at);
+      }
+      const auto slash = item.find('/'), eq = item.find('=');
       int id = -1, idx = -1;
       if (slash != std::string_view::npos && eq != std::string_view::npos && slash < eq) {
         id = parse_int(item.substr(slash + 1, eq - slash - 1), 0, 255);
@@ -48,7 +52,7 @@ std::vector<SlimeMapping> slime_mappings(const DeviceSpec& spec) {
       }
       if (id < 0 || idx < 0 || !sv::parse_mac(item.substr(0, slash), m.mac))
         throw bad("trackers: \"" + std::string(item) +
-                  "\" is not MAC/SENSOR=INDEX (e.g. AA:BB:CC:DD:EE:FF/0=3)");
+                  "\" is not MAC/SENSOR=INDEX[@AXIS_REMAP] (e.g. AA:BB:CC:DD:EE:FF/0=3)");
       m.tracker_sensor = static_cast<uint8_t>(id);
       m.sensor_id = static_cast<uint16_t>(idx);
       out.push_back(m);
@@ -74,6 +78,7 @@ SlimeVrDecoder::SlimeVrDecoder(const DeviceSpec& spec) {
   for (const SlimeMapping& m : slime_mappings(spec)) {
     DeviceSpec one = spec;
     one.first_sensor_id = m.sensor_id;
+    if (!m.axis_remap.empty()) one.axis_remap = m.axis_remap;
     sensors_.push_back(Sensor{m, DecoderCommon(one), -1});
   }
 }

@@ -25,10 +25,12 @@ struct SlimeMapping {
   slimevr::Mac mac{};
   uint8_t tracker_sensor = 0;
   uint16_t sensor_id = 0;  ///< rig sensor index stamped on samples (and used as device index)
+  std::string axis_remap;  ///< this sensor's own (a group's members differ); "" = the spec's
 };
 
-/// The mapping from spec.options: "trackers" = "MAC/ID=INDEX,..." (a group of rig sensors on
-/// one port), else "mac" (+ "tracker", default 0) for this one sensor. Throws invalid_argument.
+/// The mapping from spec.options: "trackers" = "MAC/ID=INDEX[@AXIS_REMAP];..." (a group of rig
+/// sensors on one port), else "mac" (+ "tracker", default 0) for this one sensor. Throws
+/// invalid_argument.
 std::vector<SlimeMapping> slime_mappings(const DeviceSpec& spec);
 
 /// A board that sent a handshake (for status and `mocap devices`).

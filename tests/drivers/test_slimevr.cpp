@@ -125,7 +125,7 @@ TEST(SlimeVrDecoder, MapsMacAndSensorIdToTheRigSensorAndCarriesTheOrientation) {
   DeviceSpec spec;
   spec.name = "slime";
   spec.protocol = "slimevr";
-  spec.options["trackers"] = "02:5E:00:00:00:01/1=7,02:5E:00:00:00:02/0=3";
+  spec.options["trackers"] = "02:5E:00:00:00:01/1=7;02:5E:00:00:00:02/0=3@-y,x,z";
   auto dec = make_decoder(spec);
   test::CollectSink sink;
   std::vector<uint8_t> d;
@@ -196,7 +196,7 @@ TEST(SlimeVrDevice, UnmodifiedTrackerLogicConnectsOverRealUdpAndStreams) {
   spec.name = "slimevr";
   spec.protocol = "slimevr";
   spec.port = "udp:127.0.0.1:" + std::to_string(port);
-  spec.options["trackers"] = "02:5E:00:00:00:01/0=0,02:5E:00:00:00:01/1=1,02:5E:00:00:00:02/0=2";
+  spec.options["trackers"] = "02:5E:00:00:00:01/0=0;02:5E:00:00:00:01/1=1;02:5E:00:00:00:02/0=2";
   auto dev = make_device(spec, Logger(test::g_log_sink, "test"));
   ResetSink sink;
   dev->start(sink);

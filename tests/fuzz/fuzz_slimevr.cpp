@@ -12,7 +12,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   mocap::DeviceSpec spec;
   spec.name = "fuzz";
   spec.protocol = "slimevr";
-  spec.options["trackers"] = "02:5E:00:00:00:01/0=0,02:5E:00:00:00:01/1=1,00:00:00:00:00:00/0=2";
+  spec.options["trackers"] =
+      "02:5E:00:00:00:01/0=0;02:5E:00:00:00:01/1=1@-y,x,z;00:00:00:00:00:00/0=2";
   auto dec = mocap::make_decoder(spec);
   mocap::fuzz::CheckingSink sink;
   std::size_t off = 0;
