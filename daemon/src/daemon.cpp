@@ -53,7 +53,9 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
   d.realtime_priority = cfg.pipeline.realtime_priority;
   if (s.driver == "slimevr" && device_leader(cfg, i) == i) {
     // One socket for every tracker on this port: MAC/SENSOR=INDEX for each member.
+    // (A lone sensor keeps its own options.mac/tracker, whose errors name those keys.)
     std::string map;
+    size_t members = 0;
     for (size_t j = i; j < cfg.sensors.size(); ++j) {
       if (cfg.sensors[j].driver != "slimevr" || device_leader(cfg, j) != i) continue;
       const auto& o = cfg.sensors[j].options;
@@ -61,8 +63,9 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
       map += (map.empty() ? "" : ";") + (mac == o.end() ? std::string("?") : mac->second) + "/" +
              (id == o.end() ? std::string("0") : id->second) + "=" + std::to_string(j) + "@" +
              cfg.sensors[j].axis_remap;
+      ++members;
     }
-    d.options["trackers"] = map;
+    if (members > 1) d.options["trackers"] = map;
   }
   return d;
 }

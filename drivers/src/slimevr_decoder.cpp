@@ -32,6 +32,9 @@ std::vector<SlimeMapping> slime_mappings(const DeviceSpec& spec) {
   const auto bad = [&](const std::string& what) {
     return std::invalid_argument("device " + spec.name + ": " + what);
   };
+  if (!spec.port.empty() && spec.port.rfind("udp:", 0) != 0)
+    throw bad("a slimevr port is udp:HOST:PORT (trackers talk to udp:0.0.0.0:6969), not \"" +
+              spec.port + "\"");
   const std::string trackers = option_string(spec, "trackers", "");
   if (!trackers.empty()) {
     std::string_view rest = trackers;

@@ -179,6 +179,11 @@ TEST(SlimeVrDecoder, ASensorWithoutAMacIsRefusedWithAClearError) {
   EXPECT_THROW(make_decoder(spec), std::invalid_argument);
   spec.options["trackers"] = "02:5E:00:00:00:01=3";
   EXPECT_THROW(make_decoder(spec), std::invalid_argument);
+  spec.options.erase("trackers");
+  spec.options["mac"] = "02:5E:00:00:00:01";
+  EXPECT_NO_THROW(make_decoder(spec));
+  spec.port = "/dev/ttyUSB0";  // trackers talk UDP
+  EXPECT_THROW(make_decoder(spec), std::invalid_argument);
 }
 
 struct ResetSink : test::CollectSink {
