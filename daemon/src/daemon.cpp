@@ -24,11 +24,22 @@ std::vector<SensorInfo> sensor_infos(const Config& cfg) {
   return out;
 }
 
+namespace {
+/// Drivers whose sensors on one port share a device (one socket / one receiver dongle).
+bool shared_port_driver(const std::string& d) {
+  return d == "slimevr" || d == "slimevr_hid";
+}
+}  // namespace
+
 size_t device_leader(const Config& cfg, size_t i) {
   const SensorConfig& s = cfg.sensors.at(i);
-  if (s.driver != "slimevr") return i;
-  for (size_t j = 0; j < i; ++j)
-    if (cfg.sensors[j].driver == "slimevr" && cfg.sensors[j].port == s.port) return j;
+  if (!shared_port_driver(s.driver)) return i;
+  for (size_t j = 0; j < i; ++j) {
+    const SensorConfig& o = cfg.sensors[j];
+    if (o.driver == s.driver && o.port == s.port && o.vid == s.vid && o.pid == s.pid &&
+        o.serial == s.serial)
+      return j;
+  }
   return i;
 }
 
@@ -51,13 +62,13 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
   d.axis_remap = s.axis_remap;
   d.options = s.options;
   d.realtime_priority = cfg.pipeline.realtime_priority;
-  if (s.driver == "slimevr" && device_leader(cfg, i) == i) {
+  if (shared_port_driver(s.driver) && device_leader(cfg, i) == i) {
     // One socket for every tracker on this port: MAC/SENSOR=INDEX for each member.
     // (A lone sensor keeps its own options.mac/tracker, whose errors name those keys.)
     std::string map;
     size_t members = 0;
     for (size_t j = i; j < cfg.sensors.size(); ++j) {
-      if (cfg.sensors[j].driver != "slimevr" || device_leader(cfg, j) != i) continue;
+      if (cfg.sensors[j].driver != s.driver || device_leader(cfg, j) != i) continue;
       const auto& o = cfg.sensors[j].options;
       const auto mac = o.find("mac"), id = o.find("tracker");
       map += (map.empty() ? "" : ";") + (mac == o.end() ? std::string("?") : mac->second) + "/" +

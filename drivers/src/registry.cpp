@@ -18,6 +18,7 @@ const ProtocolInfo kProtocols[] = {
     {"dualsense", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
     {"joycon", ProtocolInfo::kHid, 0, 1, make_joycon_decoder, joycon_setup},
     {"slimevr", ProtocolInfo::kUdp, 0, 1, make_slimevr_decoder, nullptr},
+    {"slimevr_hid", ProtocolInfo::kHid, 0, 1, make_slimevr_hid_decoder, nullptr},
 };
 }  // namespace
 

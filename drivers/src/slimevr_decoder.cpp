@@ -32,9 +32,6 @@ std::vector<SlimeMapping> slime_mappings(const DeviceSpec& spec) {
   const auto bad = [&](const std::string& what) {
     return std::invalid_argument("device " + spec.name + ": " + what);
   };
-  if (!spec.port.empty() && spec.port.rfind("udp:", 0) != 0)
-    throw bad("a slimevr port is udp:HOST:PORT (trackers talk to udp:0.0.0.0:6969), not \"" +
-              spec.port + "\"");
   const std::string trackers = option_string(spec, "trackers", "");
   if (!trackers.empty()) {
     std::string_view rest = trackers;
@@ -78,6 +75,11 @@ std::vector<SlimeMapping> slime_mappings(const DeviceSpec& spec) {
 }
 
 SlimeVrDecoder::SlimeVrDecoder(const DeviceSpec& spec) {
+  if (!spec.port.empty() && spec.port.rfind("udp:", 0) != 0)
+    throw std::invalid_argument("device " + spec.name +
+                                ": a slimevr port is udp:HOST:PORT (trackers talk to "
+                                "udp:0.0.0.0:6969), not \"" +
+                                spec.port + "\"");
   for (const SlimeMapping& m : slime_mappings(spec)) {
     DeviceSpec one = spec;
     one.first_sensor_id = m.sensor_id;

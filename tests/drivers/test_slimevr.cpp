@@ -8,7 +8,9 @@
 #include "collect_sink.hpp"
 #include "mocap/devsim/sim_device.hpp"
 #include "mocap/devsim/sim_slimevr.hpp"
+#include "mocap/devsim/sim_transport.hpp"
 #include "mocap/drivers/slimevr.hpp"
+#include "mocap/drivers/slimevr_hid.hpp"
 
 namespace mocap {
 namespace {
@@ -249,6 +251,96 @@ TEST(SlimeVrDevice, UnmodifiedTrackerLogicConnectsOverRealUdpAndStreams) {
   ta.stop();
   dev->stop();
   EXPECT_GT(dev->stats().decoder.frames, 60u);
+}
+
+}  // namespace
+}  // namespace mocap
+
+namespace mocap {
+namespace {
+
+std::vector<uint8_t> hid_report(ProtocolEncoder& enc, const Motion& m, int64_t t_ns) {
+  std::vector<uint8_t> r;
+  enc.encode(m.at(t_ns), r);
+  return r;
+}
+
+TEST(SlimeVrHid, ParsesPacketsWithOrWithoutAReportIdAndSkipsPadding) {
+  std::vector<uint8_t> r(64, 0);
+  r[0] = slimevr_hid::kQuatAccel;
+  r[1] = 3;
+  r[8] = 0xff, r[9] = 0x7f;    // w = 32767 / 32768
+  r[14] = 0x80, r[15] = 0x04;  // az = 1152 / 128 = 9 m/s^2
+  r[16] = slimevr_hid::kCompactQuatAccel;
+  r[17] = 4;
+  const uint32_t zero = 512u | 1024u << 10 | 1024u << 21;  // exponential map (0, 0, 0)
+  for (int j = 0; j < 4; ++j)
+    r[21 + j] = static_cast<uint8_t>(zero >> (8 * j));
+  r[32] = 6;  // a type whose layout is not known: skipped
+  std::array<slimevr_hid::Packet, 8> p;
+  ASSERT_EQ(slimevr_hid::parse_report(r, p), 2u);
+  EXPECT_EQ(p[0].id, 3);
+  EXPECT_NEAR(p[0].quat_xyzw[3], 1.0, 1e-4);
+  EXPECT_DOUBLE_EQ(p[0].accel_m_s2[2], 9.0);
+  EXPECT_EQ(p[1].id, 4);
+  EXPECT_NEAR(p[1].quat_xyzw[3], 1.0, 1e-3);
+  std::vector<uint8_t> with_id = {0x01};
+  with_id.insert(with_id.end(), r.begin(), r.end());
+  EXPECT_EQ(slimevr_hid::parse_report(with_id, p), 2u);
+}
+
+TEST(SlimeVrHid, TrackersAppearByAddressStreamAndLeave) {
+  DeviceSpec spec;
+  spec.name = "dongle";
+  spec.protocol = "slimevr_hid";
+  spec.port = "hid:1209:7690";
+  spec.options["trackers"] = "02:5E:00:00:00:A0/0=4;02:5E:00:00:00:A1/0=5";
+  auto dec = make_decoder(spec);
+  auto two = make_encoder("slimevr_hid", {.rate_hz = 100, .options = {{"trackers", "2"}}});
+  auto one = make_encoder("slimevr_hid", {.rate_hz = 100, .options = {{"trackers", "1"}}});
+  auto motion = make_motion("rotate");
+  test::CollectSink sink;
+  int64_t t = 1'000'000'000;
+  for (int i = 0; i < 50; ++i, t += 10'000'000)
+    dec->feed(hid_report(*two, *motion, t), t, sink);
+  int n4 = 0, n5 = 0;
+  for (const auto& s : sink.snapshot()) {
+    n4 += s.sensor_id == 4, n5 += s.sensor_id == 5;
+    ASSERT_TRUE(s.has(kFieldQuat));
+    ASSERT_FALSE(s.has(kFieldGyr));
+    const auto truth = motion->at(s.t_host_ns).q_device_sensor;
+    EXPECT_LT(s.q_device_sensor.angularDistance(truth), 1e-3);  // Q15
+  }
+  EXPECT_GE(n4, 48);
+  EXPECT_GE(n5, 47);  // its first register packet comes in the second report
+  // Tracker 2 goes away; the receiver keeps reporting tracker 1: after 3 s tracker 2 has left.
+  for (int i = 0; i < 400; ++i, t += 10'000'000)
+    dec->feed(hid_report(*one, *motion, t), t, sink);
+  int appeared = 0, left = 0;
+  for (const auto& e : sink.events_snapshot()) {
+    appeared += e.connected && e.reason.find("appeared") != std::string::npos;
+    left += !e.connected && e.reason == "tracker 02:5E:00:00:00:A1 left the receiver";
+  }
+  EXPECT_EQ(appeared, 2);
+  EXPECT_EQ(left, 1);
+}
+
+TEST(SlimeVrHid, TheLiveDeviceRunsOnASimulatedReceiver) {
+  DeviceSpec spec;
+  spec.name = "dongle";
+  spec.protocol = "slimevr_hid";
+  spec.options["mac"] = "02:5E:00:00:00:A0";
+  spec.first_sensor_id = 2;
+  auto dev = make_device_with_transport(spec, Logger(test::g_log_sink, "test"), [](std::string&) {
+    return std::make_unique<SimReportTransport>(
+        make_encoder("slimevr_hid", {.rate_hz = 200, .options = {}}), make_motion("rotate"));
+  });
+  test::CollectSink sink;
+  dev->start(sink);
+  EXPECT_TRUE(sink.wait_for([&] { return sink.count() > 50; }));
+  dev->stop();
+  for (const auto& s : sink.snapshot())
+    EXPECT_EQ(s.sensor_id, 2);
 }
 
 }  // namespace
