@@ -101,6 +101,13 @@ std::vector<SlimeBoardInfo> SlimeVrDecoder::boards() const {
   return out;
 }
 
+std::size_t SlimeVrDecoder::board_count() const {
+  std::size_t n = 0;
+  for (const Board& b : boards_)
+    n += b.used && b.hello;
+  return n;
+}
+
 int SlimeVrDecoder::board_for(uint32_t ip, uint16_t port, int64_t t_ns) {
   int free = -1, oldest = 0;
   for (std::size_t i = 0; i < boards_.size(); ++i) {

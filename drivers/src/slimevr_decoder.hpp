@@ -64,6 +64,7 @@ class SlimeVrDecoder final : public ProtocolDecoder {
   std::span<const Reply> pending_replies() const { return {replies_.data(), n_replies_}; }
   void clear_replies() { n_replies_ = 0; }
   std::vector<SlimeBoardInfo> boards() const;
+  std::size_t board_count() const;  ///< boards that said hello (no allocation)
   /// Calls f(record) with each known board's handshake record as it arrived (address
   /// included). The device records them again now and then, so a recording started after the
   /// boards connected still names them when its raw datagrams replay through this decoder.

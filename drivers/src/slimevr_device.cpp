@@ -167,12 +167,13 @@ class SlimeVrDevice final : public Device {
           dec_.each_hello_record(
               [&](std::span<const uint8_t> rec) { sink.on_raw(spec_.device_index, now, rec); });
         }
-        const auto boards = dec_.boards();
-        if (boards.size() != known_boards) {
-          for (const auto& b : boards)
-            log_.debug("%s: tracker %s (firmware \"%s\", protocol %u)", spec_.name.c_str(),
-                       slimevr::mac_string(b.mac).c_str(), b.firmware.c_str(), b.protocol_version);
-          known_boards = boards.size();
+        if (dec_.board_count() != known_boards) {  // (a list only when boards come or go)
+          for (const auto& b : dec_.boards())
+            log_.info("%s: tracker %s at %u.%u.%u.%u (firmware \"%s\", protocol %u)",
+                      spec_.name.c_str(), slimevr::mac_string(b.mac).c_str(), b.ip >> 24,
+                      b.ip >> 16 & 255, b.ip >> 8 & 255, b.ip & 255, b.firmware.c_str(),
+                      b.protocol_version);
+          known_boards = dec_.board_count();
         }
       }
       send_replies();
