@@ -16,6 +16,7 @@ namespace {
 
 constexpr int64_t kHeartbeatNs = 500'000'000;
 constexpr int64_t kPingNs = 1'000'000'000;
+constexpr int64_t kHoldNs = 100'000'000;  // a resting tracker's orientation repeated this often
 constexpr double kGravity_m_s2 = 9.80665;
 
 int parse_int(std::string_view s, int lo, int hi) {
@@ -245,7 +246,7 @@ void SlimeVrDecoder::handle(int bi, const sv::Packet& p, int64_t t_ns, SampleSin
   (void)t_ns;
 }
 
-void SlimeVrDecoder::emit(Sensor& s, int64_t t_ns, SampleSink& sink) {
+void SlimeVrDecoder::emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t flags) {
   s.new_quat = false;
   const double norm = s.q.norm();
   if (!std::isfinite(norm) || norm < 0.5 || norm > 1.5) {
@@ -255,6 +256,8 @@ void SlimeVrDecoder::emit(Sensor& s, int64_t t_ns, SampleSink& sink) {
   ImuSample out;
   out.q_device_sensor = s.q;
   out.valid = kFieldQuat;
+  out.flags = flags;
+  s.last_emit_ns = t_ns;
   if (s.has_acc) {
     // The tracker sends linear acceleration (gravity removed) in the sensor frame; the sample
     // carries specific force, so gravity is put back through the tracker's own orientation.
@@ -291,6 +294,9 @@ void SlimeVrDecoder::tick(int64_t t_ns, SampleSink& sink) {
       continue;
     }
     if (!b.hello) continue;
+    for (Sensor& s : sensors_)
+      if (s.board == static_cast<int>(i) && s.connected && t_ns - s.last_emit_ns >= kHoldNs)
+        emit(s, t_ns, sink, kFlagInterpolated);  // at rest: the same orientation, still alive
     if (t_ns - b.last_heartbeat_ns >= kHeartbeatNs) {
       b.last_heartbeat_ns = t_ns;
       std::array<uint8_t, 12> hb{};

@@ -51,7 +51,9 @@ class SlimeVrDecoder final : public ProtocolDecoder {
   uint64_t replies(uint32_t type) const override;
 
   /// Keep-alive: heartbeats every 0.5 s and pings every 1 s to each known board; a board
-  /// silent for timeout_ns is forgotten and its sensors reported disconnected.
+  /// silent for timeout_ns is forgotten and its sensors reported disconnected. A resting
+  /// tracker sends no rotations (the firmware sends only changes) while it still answers: its
+  /// orientation is repeated every 100 ms (kFlagInterpolated) so it is not taken as stale.
   void tick(int64_t t_host_ns, SampleSink& sink);
 
   struct Reply {
@@ -97,6 +99,7 @@ class SlimeVrDecoder final : public ProtocolDecoder {
     DecoderCommon common;
     int board = -1;  ///< index in boards_ while connected
     bool new_quat = false, has_acc = false, connected = false;
+    int64_t last_emit_ns = 0;
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
     Eigen::Vector3d lin_acc_m_s2 = Eigen::Vector3d::Zero();
   };
@@ -104,7 +107,7 @@ class SlimeVrDecoder final : public ProtocolDecoder {
   int board_for(uint32_t ip, uint16_t port, int64_t t_ns);
   void handle(int b, const slimevr::Packet& p, int64_t t_ns, SampleSink& sink);
   void queue(const Board& b, std::span<const uint8_t> bytes);
-  void emit(Sensor& s, int64_t t_ns, SampleSink& sink);
+  void emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t flags = 0);
 
   DecoderStats stats_;
   std::array<Board, kMaxBoards> boards_{};

@@ -253,6 +253,37 @@ TEST(SlimeVrDevice, UnmodifiedTrackerLogicConnectsOverRealUdpAndStreams) {
   EXPECT_GT(dev->stats().decoder.frames, 60u);
 }
 
+// A resting tracker (the firmware sends only changed rotations) still answers the server: its
+// orientation is repeated (flagged interpolated) so the rig never takes it for stale.
+TEST(SlimeVrDevice, AQuietRestingTrackerKeepsItsOrientationAlive) {
+  const int port = test::free_loopback_port(SOCK_DGRAM);
+  DeviceSpec spec;
+  spec.name = "slimevr";
+  spec.protocol = "slimevr";
+  spec.port = "udp:127.0.0.1:" + std::to_string(port);
+  spec.options["mac"] = "02:5E:00:00:00:09";
+  auto dev = make_device(spec, Logger(test::g_log_sink, "test"));
+  test::CollectSink sink;
+  dev->start(sink);
+  SimSlimeOptions o;
+  o.server = "127.0.0.1:" + std::to_string(port);
+  o.mac = "02:5E:00:00:00:09";
+  o.motion = "static";
+  o.optimize_updates = true;
+  SimSlimeTracker t(o);
+  t.start();
+  ASSERT_TRUE(sink.wait_for([&] { return sink.count() >= 15; }));  // about 1.5 s of rest
+  t.stop();
+  dev->stop();
+  const auto all = sink.snapshot();
+  EXPECT_FALSE(all.front().flags & kFlagInterpolated);  // the one rotation sent
+  for (std::size_t i = 1; i < all.size(); ++i) {
+    EXPECT_TRUE(all[i].flags & kFlagInterpolated);
+    EXPECT_LT(all[i].q_device_sensor.angularDistance(all.front().q_device_sensor), 1e-9);
+    EXPECT_LT(all[i].t_host_ns - all[i - 1].t_host_ns, 250'000'000);  // never stale
+  }
+}
+
 }  // namespace
 }  // namespace mocap
 

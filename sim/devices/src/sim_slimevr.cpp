@@ -102,6 +102,7 @@ SimSlimeTracker::SimSlimeTracker(SimSlimeOptions opt) : opt_(std::move(opt)) {
     throw std::invalid_argument("rate: 0 < Hz <= 1000");
   motion_ = make_motion(opt_.motion);
   info_acked_.assign(static_cast<std::size_t>(opt_.sensors), false);
+  last_sent_.assign(static_cast<std::size_t>(opt_.sensors), std::nullopt);
   std::string host, port, err;
   if (!split_host_port(opt_.server, host, port, err)) throw std::invalid_argument(err);
   addrinfo hints{};
@@ -210,6 +211,9 @@ void SimSlimeTracker::run() {
       for (int k = 0; k < opt_.sensors; ++k) {
         const ImuSample truth = motion_->at(t_device_ns + sensor_phase_ns(k));
         const Eigen::Quaterniond q = truth.q_device_sensor.normalized();
+        auto& last = last_sent_[static_cast<size_t>(k)];
+        if (opt_.optimize_updates && last && q.angularDistance(*last) < 1e-4) continue;
+        last = q;
         // What the firmware sends: rotation, then linear acceleration in the sensor frame.
         const Eigen::Vector3d lin =
             truth.acc_m_s2 - q.conjugate() * Eigen::Vector3d(0, 0, kGravity_m_s2);

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -40,6 +41,9 @@ struct SimSlimeOptions {
   int sensors = 1;  ///< IMUs on the board (sensor ids 0..n-1; each its own phase of the motion)
   double rate_hz = 100;
   std::string motion = "rotate";  ///< as make_motion
+  /// The firmware's OPTIMIZE_UPDATES: a rotation is sent only when it changed (a resting
+  /// tracker goes quiet but for its answers to the server).
+  bool optimize_updates = false;
 };
 
 class SimSlimeTracker {
@@ -75,6 +79,7 @@ class SimSlimeTracker {
   uint64_t number_ = 0;
   int64_t last_server_ns_ = 0;
   std::vector<bool> info_acked_;
+  std::vector<std::optional<Eigen::Quaterniond>> last_sent_;  ///< per sensor, for optimize
 };
 
 }  // namespace mocap
