@@ -2,6 +2,7 @@
 // skeleton, for one rig.
 #include "mocap/rig/body_tracker.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -54,7 +55,9 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       heading_(opt_.heading_from_motion),
       has_mag_(sensors_.size(), false),
       is_source_(sensors_.size(), false),
-      q_source_(sensors_.size(), Eigen::Quaterniond::Identity()) {}
+      q_source_(sensors_.size(), Eigen::Quaterniond::Identity()),
+      prev_w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
+      prev_w_t_ns_(sensors_.size(), 0) {}
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
   if (is_source_[static_cast<size_t>(i)]) return q_source_[static_cast<size_t>(i)];
@@ -96,9 +99,8 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
     }
   }
   // 4. 6D: the heading of the sensors whose site normal could not give it, from motion.
-  if (heading_.active() && s.has(kFieldGyr)) {
-    const Eigen::Vector3d w_sensor = s.gyr_rad_s - f.gyro_bias_rad_s();
-    heading_.add(seg, skeleton_.calibration().q_correction[seg] * (q * w_sensor), s.t_host_ns);
+  if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
+    feed_heading_from_motion(i, s, q);
     apply_heading_from_motion(s.t_host_ns);
   }
   // 5. The segment's input: orientation and the filter's flags.
@@ -106,6 +108,65 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
                          (opt_.use_mag && f.mag_disturbed() ? uint32_t{kSegMagDisturbed} : 0u) |
                          (opt_.use_mag && f.mag_no_reference() ? uint32_t{kSegMagNoReference} : 0u);
   skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, flags);
+}
+
+void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q) {
+  constexpr double kHighPassTauS = 1.0;  // slower than a step, faster than a tilt error's drift
+  constexpr double kGravity_m_s2 = 9.81;
+  const size_t k = static_cast<size_t>(i);
+  const int seg = sensors_[k].segment;
+  const Calibration& c = skeleton_.calibration();
+  const Eigen::Vector3d w = s.gyr_rad_s - filters_[k].gyro_bias_rad_s();
+  const double dt_s = static_cast<double>(s.t_host_ns - prev_w_t_ns_[k]) * 1e-9;
+  const bool have_dw = prev_w_t_ns_[k] != 0 && dt_s > 0 && dt_s < 0.05;
+  const Eigen::Vector3d dw =
+      have_dw ? Eigen::Vector3d((w - prev_w_rad_s_[k]) / dt_s) : Eigen::Vector3d::Zero();
+  prev_w_rad_s_[k] = w;
+  prev_w_t_ns_[k] = s.t_host_ns;
+  if (!have_dw) return;
+  const Eigen::Quaterniond q_aligned = c.q_correction[seg] * q;
+  // Acceleration (gravity removed, aligned earth frame) of the point r_seg of the segment's
+  // frame from its sensor: the sensor's specific force plus the rotation terms.
+  const auto acc_at = [&](const Eigen::Vector3d& r_seg) -> Eigen::Vector3d {
+    const Eigen::Vector3d r = c.q_sensor_segment[seg] * r_seg;
+    const Eigen::Vector3d a = s.acc_m_s2 + dw.cross(r) + w.cross(w.cross(r));
+    return q_aligned * a - Eigen::Vector3d(0, 0, kGravity_m_s2);
+  };
+  // The same high-pass for both signals of a pair (it commutes with the yaw sought).
+  const auto high_pass = [&](const Eigen::Vector3d& v, Eigen::Vector3d& slow, int64_t& t_ns) {
+    if (t_ns == 0)
+      slow = v;
+    else
+      slow += std::clamp((s.t_host_ns - t_ns) * 1e-9 / kHighPassTauS, 0.0, 1.0) * (v - slow);
+    t_ns = s.t_host_ns;
+    return Eigen::Vector3d(v - slow);
+  };
+  // As a fitted segment: its sensor's acceleration (its joint's, but for the rotation about the
+  // joint, whose direction in the sensor frame depends on the very alignment sought), or its
+  // rate when the reference is further up than its parent.
+  if (heading_.reference(seg) >= 0) {
+    if (heading_.reference(seg) == kSegmentParent[seg])
+      heading_.add(seg,
+                   high_pass(acc_at(Eigen::Vector3d::Zero()), slow_own_[seg], slow_own_t_ns_[seg]),
+                   s.t_host_ns);
+    else
+      heading_.add(seg, q_aligned * w, s.t_host_ns);
+  }
+  // As a reference: the acceleration of the joint it shares with each segment fitted to it
+  // (from the standard site, skeleton/sensor_sites.hpp), or its rate.
+  const BodyModel& model = skeleton_.model();
+  for (int child = 0; child < kSegmentCount; ++child) {
+    if (heading_.reference(child) != seg) continue;
+    if (kSegmentParent[child] == seg) {
+      const Eigen::Vector3d joint_m =
+          model.joint_offset_m(child) -
+          standard_site_position_m(static_cast<Segment>(seg), model.dimensions());
+      heading_.add_reference(
+          child, high_pass(acc_at(joint_m), slow_ref_[child], slow_ref_t_ns_[child]), s.t_host_ns);
+    } else {
+      heading_.add_reference(child, q_aligned * w, s.t_host_ns);
+    }
+  }
 }
 
 std::array<bool, kSegmentCount> BodyTracker::own_heading_frames() const {
@@ -136,6 +197,8 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
       reference[s] = p;
     }
   heading_.reset(reference);
+  slow_own_t_ns_.fill(0);
+  slow_ref_t_ns_.fill(0);
 }
 
 void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
@@ -147,7 +210,8 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   bool changed = false;
   for (int s = 0; s < kSegmentCount; ++s) {
     double yaw = 0;
-    if (!heading_.estimate(s, yaw) || std::abs(yaw) < kMinTurnRad) continue;
+    if (!heading_.estimate(s, yaw)) continue;
+    if (std::abs(yaw) < kMinTurnRad) continue;
     // The sensor's frame turns by yaw; its mounting keeps the segment's calibration pose:
     // q_ss' = q_ss T^-1 Y^-1 T with T the segment's orientation at calibration.
     const Eigen::Quaterniond y(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));

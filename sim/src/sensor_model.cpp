@@ -82,62 +82,11 @@ std::vector<MagneticDipole> disturbance_preset(std::string_view name, double hei
                               "' (valid: none, magnet, desk, both)");
 }
 
-namespace {
-/// +1 for the left limbs' lateral sites (+y), -1 otherwise.
-double site_side(Segment seg) {
-  return (seg == Segment::upper_arm_l || seg == Segment::forearm_l || seg == Segment::hand_l ||
-          seg == Segment::thigh_l)
-             ? 1.0
-             : -1.0;
-}
-}  // namespace
-
 SensorMount make_mount(Segment seg, const BodyDimensions& dims, const SensorModelParams& p,
                        std::mt19937_64& rng) {
   using V = Eigen::Vector3d;
-  const double s = dims.height_m / 1.75;
-  const V end = dims.end_offset_m[index(seg)];
-  const double side = site_side(seg);
-  V r = V::Zero();
+  const V r = standard_site_position_m(seg, dims);
   const V normal = standard_site_normal_body(seg);
-  switch (seg) {
-    case Segment::pelvis:
-      r = V(-0.10 * s, 0, 0.05 * s);
-      break;
-    case Segment::torso:
-      r = V(0.11 * s, 0, 0.6 * end.z());
-      break;
-    case Segment::neck:
-      r = V(-0.05 * s, 0, 0.5 * end.z());
-      break;
-    case Segment::head:
-      r = V(0, 0, end.z() + 0.01 * s);
-      break;
-    case Segment::upper_arm_l:
-    case Segment::upper_arm_r:
-      r = V(0, side * 0.05 * s, 0.5 * end.z());
-      break;
-    case Segment::forearm_l:
-    case Segment::forearm_r:
-      r = V(0, side * 0.035 * s, 0.7 * end.z());
-      break;
-    case Segment::hand_l:
-    case Segment::hand_r:
-      r = V(0, side * 0.02 * s, 0.4 * end.z());
-      break;
-    case Segment::thigh_l:
-    case Segment::thigh_r:
-      r = V(0.07 * s, side * 0.03 * s, 0.5 * end.z());
-      break;
-    case Segment::shank_l:
-    case Segment::shank_r:
-      r = V(0.045 * s, 0, 0.4 * end.z());
-      break;
-    case Segment::foot_l:
-    case Segment::foot_r:
-      r = V(0.5 * end.x(), 0, -0.01 * s);
-      break;
-  }
   // Sensor z along the outward normal, then the strap roll about it, then misalignment.
   Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(V::UnitZ(), normal);
   std::uniform_real_distribution<double> roll(-std::numbers::pi, std::numbers::pi);

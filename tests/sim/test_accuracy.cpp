@@ -59,13 +59,15 @@ TEST(RealMotion, SixDRigCalibratesFromTheSiteNormals) {
   for (Segment s : {Segment::pelvis, Segment::torso, Segment::thigh_l, Segment::thigh_r,
                     Segment::upper_arm_l, Segment::upper_arm_r})
     EXPECT_LE(r.metric_segment_deg[index(s)], r.alone_segment_deg[index(s)] + 6.0) << name(s);
-  // Head and feet (vertical site normals) are aligned from motion during the walk: measured
-  // 5.4 / 10.3 / 11.1 deg (a heading borrowed from the segment above: 30 / 29 / 6). Guards.
+  // Head and feet (vertical site normals) are aligned from motion during the walk (their
+  // acceleration against the joint centre's from the sensor above): measured 3.5 / 3.1 / 2.3 deg
+  // (rate fit before: 5.4 / 10.3 / 11.1; a heading borrowed from the segment above: 30 / 29 / 6).
   for (Segment s : {Segment::head, Segment::foot_l, Segment::foot_r})
-    EXPECT_LE(r.metric_segment_deg[index(s)], 15.0) << name(s);
-  // Target (mean <= 1.5 x the ideally aligned filters) missed: measured 3.0 x here, 1.86 x
-  // over the 24 clips (docs/accuracy.md). A regression guard.
-  EXPECT_LE(r.metric_mean_deg, 3.5 * r.alone_mean_deg);
+    EXPECT_LE(r.metric_segment_deg[index(s)], 7.0) << name(s);
+  // Target (mean <= 1.5 x the ideally aligned filters): measured 2.0 x on this short clip
+  // (the arms' strap misalignment weighs more in 3.9 s), 1.52 x over the 24 clips
+  // (docs/accuracy.md). A regression guard.
+  EXPECT_LE(r.metric_mean_deg, 2.5 * r.alone_mean_deg);
 }
 
 // A sloppy N-pose: the clip's own first frame held (bent elbows, arms off the body) instead of

@@ -108,6 +108,14 @@ class BodyTracker {
   /// Per segment: its sensor's filter has a heading frame of its own (6D, or no magnetometer).
   std::array<bool, kSegmentCount> own_heading_frames() const;
   int64_t heading_applied_t_ns_ = 0;
+  /// Per sensor: the previous bias-free rate (sensor frame) and its time, for the angular
+  /// acceleration of the joint-centre signal.
+  std::vector<Eigen::Vector3d> prev_w_rad_s_;
+  std::vector<int64_t> prev_w_t_ns_;
+  /// Per fitted segment: the slow part of its own and of its reference's signal (high-pass).
+  std::array<Eigen::Vector3d, kSegmentCount> slow_own_{}, slow_ref_{};
+  std::array<int64_t, kSegmentCount> slow_own_t_ns_{}, slow_ref_t_ns_{};
+  void feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q);
   void start_heading_from_motion(const CalibrationResult& r);
   void apply_heading_from_motion(int64_t t_ns);
 };

@@ -1,12 +1,16 @@
 // 6D rigs: the heading alignment of a sensor whose site normal is vertical (top of the head,
-// instep) cannot be read in the N-pose, so the calibration borrows the segment above's. This
-// finds its own from motion: the horizontal part of a segment's earth-frame angular rate follows
-// its reference segment's (the nearest one above with an aligned sensor: a foot pitches with its
-// shank, a head nods and turns with the torso), so the yaw that maps the one onto the other,
-// fitted over the motion (a rate-product weighted circular mean, forgotten over tau_s so slow
-// gyro drift is followed), is the missing alignment. Whatever the joint adds on its own is noise
-// to the fit, not a bias, as long as it is not correlated with the reference's rate at another
-// angle.
+// instep) cannot be read in the N-pose, so it is found from motion. The segment and its parent
+// (with an aligned sensor) share a joint, so they share its acceleration: the parent's sensor
+// gives the joint centre's (its specific force plus the rotation terms out to the joint, gravity
+// removed), the segment's own sensor gives nearly the same vector (the joint's but for the
+// rotation about it, left out because its direction in the sensor frame depends on the very
+// alignment sought). The yaw that maps the segment's horizontal acceleration onto the parent's
+// is the missing alignment, for any joint (no axis assumed). The caller high-passes both signals
+// alike (a filter commutes with the yaw and removes each filter's slow gravity leak); the fit is
+// a weighted circular mean of the angle between them, each instant's weight saturating (a jump
+// must not outvote seconds of walking), forgotten over tau_s so slow heading drift is followed.
+// A reference further up than the parent (no sensor between) gives angular rates instead: the
+// horizontal rates of a foot and the thigh above follow each other, more loosely.
 #pragma once
 
 #include <Eigen/Core>
@@ -19,10 +23,12 @@ namespace mocap::rig {
 
 struct HeadingFromMotionOptions {
   double tau_s = 30.0;  ///< forgetting time of the fit, seconds of sample time
-  /// Evidence before a yaw is given: the integral of |w_child,h| |w_ref,h| dt, rad^2/s (about a
-  /// second of walking).
-  double min_evidence = 0.1;
-  /// A reference sample older than this is not paired with a child's sample, seconds.
+  /// Evidence before a yaw is given: the integral of the weighted |a_seg,h| |a_ref,h| dt, in the
+  /// signal's units squared times seconds.
+  double min_evidence = 0.03;
+  /// Product |a_seg,h| |a_ref,h| at which an instant's weight is halved, signal units squared.
+  double saturation = 1.0;
+  /// A reference sample older than this is not paired with a segment's sample, seconds.
   double max_pair_age_s = 0.02;
 };
 
@@ -30,26 +36,32 @@ class HeadingFromMotion {
  public:
   explicit HeadingFromMotion(HeadingFromMotionOptions options = {}) : opt_(options) {}
 
-  /// Starts over after a calibration: `reference[s]` is the segment whose rate segment s's is
+  /// Starts over after a calibration: `reference[s]` is the segment whose signal segment s's is
   /// fitted to, -1 for segments whose heading needs nothing.
   void reset(const std::array<int, kSegmentCount>& reference);
-  /// The newest earth-frame angular rate of a segment's sensor under the alignment in use.
-  void add(int segment, const Eigen::Vector3d& w_earth_rad_s, int64_t t_ns);
+  /// The reference's newest signal for segment s (earth frame, the reference's alignment).
+  void add_reference(int segment, const Eigen::Vector3d& v_earth, int64_t t_ns);
+  /// Segment s's newest signal under the alignment in use; paired with its reference's.
+  void add(int segment, const Eigen::Vector3d& v_earth, int64_t t_ns);
   /// The yaw (rad, about the vertical) that would align the segment's sensor, once there is
   /// enough evidence; false before.
   bool estimate(int segment, double& yaw_rad) const;
   /// The caller turned the segment's alignment by yaw_rad: the fit continues in the new frame.
   void applied(int segment, double yaw_rad);
   bool active() const { return active_; }
+  int reference(int segment) const { return ref_[segment]; }
 
  private:
   HeadingFromMotionOptions opt_;
   bool active_ = false;
   std::array<int, kSegmentCount> ref_{};
-  std::array<Eigen::Vector2d, kSegmentCount> last_w_{};
+  std::array<Eigen::Vector2d, kSegmentCount> ref_v_{};
+  std::array<int64_t, kSegmentCount> ref_t_ns_{};
+  std::array<bool, kSegmentCount> have_ref_{};
   std::array<int64_t, kSegmentCount> last_t_ns_{};
   std::array<bool, kSegmentCount> have_{};
-  /// Per fitted segment: sum of |a||b| (cos, sin) of the angle from its rate to the reference's.
+  /// Per fitted segment: weighted sum of |a||b| (cos, sin) of the angle from its signal to the
+  /// reference's.
   std::array<Eigen::Vector2d, kSegmentCount> sum_{};
   std::array<double, kSegmentCount> evidence_{};
 };

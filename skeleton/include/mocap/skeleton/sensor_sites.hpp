@@ -13,10 +13,15 @@
 #include <Eigen/Core>
 
 #include "mocap/core/segments.hpp"
+#include "mocap/skeleton/body_model.hpp"
 
 namespace mocap {
 
 /// Unit outward normal of the standard sensor site on `s` (body frame, N-pose).
 Eigen::Vector3d standard_site_normal_body(Segment s);
+
+/// Where the standard site is on `s`: the skin point in the segment's own frame (origin at its
+/// joint, N-pose axes), metres, scaled to the body's dimensions.
+Eigen::Vector3d standard_site_position_m(Segment s, const BodyDimensions& dims);
 
 }  // namespace mocap
