@@ -164,8 +164,7 @@ struct RecordBenchOptions {
 };
 
 int run_record(const RecordBenchOptions& o) {
-  const fs::path dir =
-      fs::path(o.dir) / ("mocap-bench-record-" + std::to_string(::getpid()));
+  const fs::path dir = fs::path(o.dir) / ("mocap-bench-record-" + std::to_string(::getpid()));
   std::error_code ec;
   fs::create_directories(dir, ec);
   int rc = 0;

@@ -1,4 +1,5 @@
-// DaemonRig: ptys + WitMotion encoders + a spawned mocapd; /proc readings (daemon_harness.hpp).
+// DaemonRig: ptys + WitMotion encoders (or SlimeVR boards on UDP) + a spawned mocapd; /proc
+// readings (daemon_harness.hpp).
 #include "daemon_harness.hpp"
 
 #include <arpa/inet.h>
@@ -23,13 +24,14 @@
 
 #include "mocap/core/segments.hpp"
 #include "mocap/core/time.hpp"
+#include "mocap/devsim/sim_slimevr.hpp"
 
 namespace mocap::bench {
 
 namespace {
 
-int free_tcp_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+int free_port(int type) {
+  const int fd = ::socket(AF_INET, type, 0);
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
@@ -39,8 +41,25 @@ int free_tcp_port() {
       ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0)
     port = ntohs(a.sin_port);
   ::close(fd);
-  if (port == 0) throw std::runtime_error("cannot find a free TCP port");
+  if (port == 0) throw std::runtime_error("cannot find a free loopback port");
   return port;
+}
+
+/// The MAC of simulated SlimeVR board i.
+slimevr::Mac board_mac(int i) {
+  return {0x02, 0x5E, 0x00, 0x00, static_cast<uint8_t>(i >> 8), static_cast<uint8_t>(i)};
+}
+
+/// A UDP socket connected to 127.0.0.1:port (a tracker board's).
+int board_socket(int port) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (fd < 0 || ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0)
+    throw std::runtime_error("cannot open a UDP socket for a SlimeVR board");
+  return fd;
 }
 
 std::string mocapd_path() {
@@ -68,7 +87,11 @@ DaemonRig::DaemonRig(const RigOptions& o) : opt_(o) {
   dir_ = tmpl;
   ctl_ = dir_ + "/ctl.sock";
   log_ = dir_ + "/mocapd.log";
-  port_ = free_tcp_port();
+  port_ = free_port(SOCK_STREAM);
+  const bool slime = opt_.protocol == "slimevr";
+  if (!slime && opt_.protocol != "witmotion")
+    throw std::runtime_error("protocol " + opt_.protocol + ": the harness has witmotion, slimevr");
+  const int udp_port = slime ? free_port(SOCK_DGRAM) : 0;
   std::ostringstream cfg;
   cfg << "[daemon]\nlog_level = \"warn\"\ncontrol_socket = \"" << ctl_ << "\"\n"
       << "[pipeline]\nrate_hz = " << opt_.frame_rate_hz
@@ -79,10 +102,18 @@ DaemonRig::DaemonRig(const RigOptions& o) : opt_(o) {
   EncoderOptions eo;
   eo.rate_hz = opt_.rate_hz;
   for (int i = 0; i < opt_.sensors; ++i) {
-    ptys_.push_back(std::make_unique<PtyEndpoint>());
-    enc_.push_back(make_encoder("witmotion", eo));
-    cfg << "[[sensor]]\nname = \"s" << i << "\"\ndriver = \"witmotion\"\nport = \""
-        << ptys_.back()->slave_path() << "\"\n";
+    if (slime) {
+      boards_.push_back({board_socket(udp_port)});
+      cfg << "[[sensor]]\nname = \"s" << i
+          << "\"\ndriver = \"slimevr\"\nport = \"udp:127.0.0.1:" << udp_port
+          << "\"\noptions = { mac = \"" << slimevr::mac_string(board_mac(i))
+          << "\", tracker = 0 }\n";
+    } else {
+      ptys_.push_back(std::make_unique<PtyEndpoint>());
+      enc_.push_back(make_encoder("witmotion", eo));
+      cfg << "[[sensor]]\nname = \"s" << i << "\"\ndriver = \"witmotion\"\nport = \""
+          << ptys_.back()->slave_path() << "\"\n";
+    }
     if (i < kSegmentCount) cfg << "segment = \"" << kSegmentNames[i] << "\"\n";
   }
   const std::string cfg_path = dir_ + "/rig.toml";
@@ -104,6 +135,8 @@ DaemonRig::DaemonRig(const RigOptions& o) : opt_(o) {
 
 DaemonRig::~DaemonRig() {
   stop();
+  for (const auto& b : boards_)
+    ::close(b.fd);
   std::error_code ec;
   std::filesystem::remove_all(dir_, ec);
 }
@@ -120,6 +153,17 @@ int DaemonRig::stop() {
 }
 
 bool DaemonRig::write_sample(int i, int64_t t_device_ns) {
+  if (!boards_.empty()) {
+    SlimeBoard& b = boards_[static_cast<size_t>(i)];
+    const double ph = t_device_ns * 1e-9;
+    bytes_.clear();
+    slime_sim::rotation(
+        ++b.number, 0,
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * std::sin(ph), Eigen::Vector3d::UnitZ())),
+        bytes_);
+    return ::send(b.fd, bytes_.data(), bytes_.size(), MSG_DONTWAIT) ==
+           static_cast<ssize_t>(bytes_.size());
+  }
   ImuSample s;
   s.t_device_ns = t_device_ns;
   s.sensor_id = static_cast<uint16_t>(i);
@@ -136,6 +180,19 @@ bool DaemonRig::write_sample(int i, int64_t t_device_ns) {
 
 void DaemonRig::answer_host() {
   uint8_t buf[256];
+  for (size_t i = 0; i < boards_.size(); ++i) {
+    SlimeBoard& b = boards_[i];
+    ssize_t n;
+    while ((n = ::recv(b.fd, buf, sizeof buf, MSG_DONTWAIT)) > 0)
+      if (n >= 11 && buf[0] == slimevr::kHandshake && std::memcmp(buf + 1, "Hey OVR =D", 10) == 0)
+        b.answered = true;
+    if (!b.answered) {
+      bytes_.clear();
+      slime_sim::handshake(board_mac(static_cast<int>(i)), bytes_);
+      ::send(b.fd, bytes_.data(), bytes_.size(), MSG_DONTWAIT);
+      b.number = 0;
+    }
+  }
   for (size_t i = 0; i < ptys_.size(); ++i) {
     const size_t n = ptys_[i]->read(std::span<uint8_t>(buf, sizeof buf), 0);
     if (n == 0) continue;

@@ -1,6 +1,6 @@
-// Shared by the live benchmarks (latency, capacity): simulated WitMotion sensors on real ptys,
-// a spawned mocapd (real drivers, pipeline, JSON server) configured to read them, and /proc
-// readings of the daemon's CPU time and memory.
+// Shared by the live benchmarks (latency, capacity): simulated WitMotion sensors on real ptys
+// (or SlimeVR tracker boards on real UDP sockets), a spawned mocapd (real drivers, pipeline,
+// JSON server) configured to read them, and /proc readings of the daemon's CPU time and memory.
 #pragma once
 
 #include <sys/types.h>
@@ -20,16 +20,21 @@ struct RigOptions {
   bool publish_every_sample = false;
   double frame_rate_hz = 120;
   int realtime_priority = 0;  ///< mocapd's pipeline.realtime_priority
+  /// "witmotion" (a pty each) or "slimevr" (a UDP board each, one sensor per board, talking to
+  /// mocapd's SlimeVR port: handshake, then one rotation datagram per sample).
+  std::string protocol = "witmotion";
 };
 
-/// N ptys with a WitMotion encoder each, and a mocapd reading them.
+/// N ptys with a WitMotion encoder each (or N SlimeVR boards), and a mocapd reading them.
 class DaemonRig {
  public:
   explicit DaemonRig(const RigOptions& o);  ///< spawns mocapd; throws std::runtime_error
   ~DaemonRig();                             ///< stops mocapd (SIGTERM, then waits)
-  /// Encodes one sample of sensor i (device time t_device_ns) and writes it to its pty.
+  /// Encodes one sample of sensor i (device time t_device_ns) and writes it to its pty (or
+  /// sends its board's rotation datagram).
   bool write_sample(int i, int64_t t_device_ns);
-  /// Answers host commands on every pty (the driver configures its device at open).
+  /// Answers host commands on every pty (the driver configures its device at open); SlimeVR:
+  /// reads the server's datagrams and repeats the handshake of boards not yet answered.
   void answer_host();
   int json_port() const { return port_; }
   pid_t pid() const { return pid_; }
@@ -45,6 +50,12 @@ class DaemonRig {
   RigOptions opt_;
   std::vector<std::unique_ptr<PtyEndpoint>> ptys_;
   std::vector<std::unique_ptr<ProtocolEncoder>> enc_;
+  struct SlimeBoard {
+    int fd = -1;
+    uint64_t number = 0;
+    bool answered = false;
+  };
+  std::vector<SlimeBoard> boards_;
   std::vector<uint8_t> bytes_, reply_;
   std::string dir_, ctl_, log_;
   int port_ = 0;

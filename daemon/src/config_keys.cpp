@@ -11,11 +11,11 @@
 // `.choices`, an optional triple, a list of segment names); `.lo`/`.hi` are its range, `.unit`
 // its unit, `.help` the docs' text; `.omit_default` for a key whose default means "absent",
 // `.removed = "why"` for a key of a removed feature (accepted with a warning). A new enum type:
-// an enum class with to_string(), and its `E& (*)(S&)` alternative in keys::Access. A new section: its struct, a table and `section<S>()` here,
-// its declaration and one line in keys::for_each_section (config_keys.hpp). Then run
-// scripts/update-config-doc (the docs' key reference is generated; a test compares).
-// Filter keys are FilterParams members: they come from the filter module's own table
-// (filter_param_names.hpp), not from here.
+// an enum class with to_string(), and its `E& (*)(S&)` alternative in keys::Access. A new section:
+// its struct, a table and `section<S>()` here, its declaration and one line in
+// keys::for_each_section (config_keys.hpp). Then run scripts/update-config-doc (the docs' key
+// reference is generated; a test compares). Filter keys are FilterParams members: they come from
+// the filter module's own table (filter_param_names.hpp), not from here.
 #include "config_keys.hpp"
 
 #include "mocap/core/thread_priority.hpp"

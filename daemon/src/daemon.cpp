@@ -25,6 +25,25 @@ std::vector<SensorInfo> sensor_infos(const Config& cfg) {
   return out;
 }
 
+namespace {
+/// Drivers whose sensors on one port share a device (one socket / one receiver dongle).
+bool shared_port_driver(const std::string& d) {
+  return d == "slimevr" || d == "slimevr_hid";
+}
+}  // namespace
+
+size_t device_leader(const Config& cfg, size_t i) {
+  const SensorConfig& s = cfg.sensors.at(i);
+  if (!shared_port_driver(s.driver)) return i;
+  for (size_t j = 0; j < i; ++j) {
+    const SensorConfig& o = cfg.sensors[j];
+    if (o.driver == s.driver && o.port == s.port && o.vid == s.vid && o.pid == s.pid &&
+        o.serial == s.serial)
+      return j;
+  }
+  return i;
+}
+
 DeviceSpec device_spec(const Config& cfg, size_t i) {
   const SensorConfig& s = cfg.sensors.at(i);
   DeviceSpec d;
@@ -44,6 +63,22 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
   d.axis_remap = s.axis_remap;
   d.options = s.options;
   d.realtime_priority = cfg.pipeline.realtime_priority;
+  if (shared_port_driver(s.driver) && device_leader(cfg, i) == i) {
+    // One socket for every tracker on this port: MAC/SENSOR=INDEX for each member.
+    // (A lone sensor keeps its own options.mac/tracker, whose errors name those keys.)
+    std::string map;
+    size_t members = 0;
+    for (size_t j = i; j < cfg.sensors.size(); ++j) {
+      if (cfg.sensors[j].driver != s.driver || device_leader(cfg, j) != i) continue;
+      const auto& o = cfg.sensors[j].options;
+      const auto mac = o.find("mac"), id = o.find("tracker");
+      map += (map.empty() ? "" : ";") + (mac == o.end() ? std::string("?") : mac->second) + "/" +
+             (id == o.end() ? std::string("0") : id->second) + "=" + std::to_string(j) + "@" +
+             cfg.sensors[j].axis_remap;
+      ++members;
+    }
+    if (members > 1) d.options["trackers"] = map;
+  }
   return d;
 }
 
@@ -74,6 +109,7 @@ void Daemon::start() {
     s->start(*pipeline_);
   if (parts_.device_factory) {
     for (size_t i = 0; i < cfg_.sensors.size(); ++i) {
+      if (device_leader(cfg_, i) != i) continue;  // a SlimeVR tracker: its port's device
       const auto& s = cfg_.sensors[i];
       auto dev = parts_.device_factory(device_spec(cfg_, i), log_.child(s.name, s.log_level));
       dev->start(*pipeline_);
@@ -120,7 +156,8 @@ void Daemon::update_device_counters() {
   for (size_t i = 0; i < devices_.size(); ++i) {
     const DeviceStats st = devices_[i]->stats();
     pipeline_->set_device_counters(
-        static_cast<int>(i), static_cast<uint32_t>(st.decoder.dropped_samples),
+        static_cast<int>(devices_[i]->spec().device_index),
+        static_cast<uint32_t>(st.decoder.dropped_samples),
         static_cast<uint32_t>(st.decoder.checksum_errors + st.decoder.resyncs));
   }
 }

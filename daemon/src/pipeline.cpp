@@ -28,7 +28,10 @@ void wait_until(int fd, int64_t deadline_ns) {
 
 Pipeline::Pipeline(const PipelineConfig& cfg, const CalibrationConfig& calib,
                    std::vector<SensorInfo> sensors, PoseEngine& engine, Logger log)
-    : cfg_(cfg), log_(std::move(log)), core_(cfg, calib, std::move(sensors), engine) {
+    : cfg_(cfg),
+      reset_pose_(calib.pose),
+      log_(std::move(log)),
+      core_(cfg, calib, std::move(sensors), engine) {
   const size_t n = core_.sensors().size();
   for (size_t i = 0; i < n; ++i) {
     slots_.push_back(std::make_unique<Slot>());
@@ -81,6 +84,15 @@ void Pipeline::on_connection(uint16_t device_index, bool connected, std::string_
   if (!connected)
     log_.warn("device %u disconnected: %.*s", device_index, static_cast<int>(reason.size()),
               reason.data());
+}
+
+void Pipeline::on_reset_request(uint16_t device_index, ResetRequest what) {
+  log_.info("device %u asked for a %s reset", device_index,
+            what == ResetRequest::full ? "full (calibration)" : "heading");
+  if (what == ResetRequest::full)
+    calibrate(reset_pose_);
+  else
+    reset_heading();
 }
 
 void Pipeline::set_device_sensor(uint16_t device_index, int sensor) {

@@ -60,7 +60,13 @@ class SessionSourceImpl final : public SampleSource {
           decoders_.push_back(nullptr);
           continue;
         }
+        if (device_leader(cfg_, static_cast<size_t>(s)) != static_cast<size_t>(s)) {
+          decoders_.push_back(nullptr);  // a SlimeVR tracker: recorded under its port's device
+          continue;
+        }
         DeviceSpec spec = device_spec(cfg_, static_cast<size_t>(s));
+        multi_sensor_.resize(decoders_.size() + 1, false);
+        multi_sensor_.back() = spec.options.count("trackers") > 0;  // ids set by the decoder
         decoders_.push_back(make_decoder(spec));
       }
     }
@@ -93,8 +99,11 @@ class SessionSourceImpl final : public SampleSource {
       if (use_raw_ && block_.type == session::BlockType::raw) {
         if (block_.device_index < decoders_.size() && decoders_[block_.device_index])
           decoders_[block_.device_index]->feed(block_.raw, block_.t_host_ns, sink_);
-        for (auto& s : queue_)
-          s.sensor_id = static_cast<uint16_t>(device_sensor_[block_.device_index]);
+        const bool multi =
+            block_.device_index < multi_sensor_.size() && multi_sensor_[block_.device_index];
+        if (!multi)
+          for (auto& s : queue_)
+            s.sensor_id = static_cast<uint16_t>(device_sensor_[block_.device_index]);
       } else if (!use_raw_ && block_.type == session::BlockType::sample) {
         const uint16_t d = block_.sample.sensor_id;
         if (d < device_sensor_.size() && device_sensor_[d] >= 0) {
@@ -123,6 +132,7 @@ class SessionSourceImpl final : public SampleSource {
   Config cfg_;
   std::vector<int> device_sensor_;
   std::vector<std::unique_ptr<StreamDecoder>> decoders_;
+  std::vector<bool> multi_sensor_;  // per device: its decoder stamps the rig's sensor ids
   std::deque<ImuSample> queue_;
   QueueSink sink_;
   bool use_raw_ = false;

@@ -12,5 +12,9 @@ std::unique_ptr<ProtocolDecoder> make_witmotion_decoder(const DeviceSpec& spec);
 std::unique_ptr<ProtocolDecoder> make_xbus_decoder(const DeviceSpec& spec);
 std::unique_ptr<ProtocolDecoder> make_playstation_decoder(const DeviceSpec& spec);
 std::unique_ptr<ProtocolDecoder> make_joycon_decoder(const DeviceSpec& spec);
+std::unique_ptr<ProtocolDecoder> make_slimevr_decoder(const DeviceSpec& spec);
+std::unique_ptr<ProtocolDecoder> make_slimevr_hid_decoder(const DeviceSpec& spec);
+/// SlimeVR trackers: one UDP socket and thread for every tracker of the spec's mapping.
+std::unique_ptr<Device> make_slimevr_device(const DeviceSpec& spec, Logger log);
 
 }  // namespace mocap

@@ -32,6 +32,8 @@ const std::vector<KnownDevice>& known_devices() {
       {0x057e, 0x2007, "joycon", "Nintendo Joy-Con (R)", KnownDevice::kHid},
       {0x057e, 0x2009, "joycon", "Nintendo Switch Pro Controller", KnownDevice::kHid},
       {0x057e, 0x200e, "joycon", "Nintendo Joy-Con Charging Grip", KnownDevice::kHid},
+      {0x1209, 0x7690, "slimevr_hid", "SlimeVR receiver dongle (Smol Slime trackers)",
+       KnownDevice::kHid},
   };
   return kTable;
 }

@@ -25,7 +25,7 @@ struct SetupStep {
 
 struct ProtocolInfo {
   std::string_view name;
-  enum Transport { kSerial, kHid } transport = kSerial;  ///< what "VID:PID" ports mean
+  enum Transport { kSerial, kHid, kUdp } transport = kSerial;  ///< what "VID:PID" ports mean
   int default_baud = 115200;
   int stop_bits = 1;
   std::unique_ptr<ProtocolDecoder> (*make_decoder)(const DeviceSpec&) = nullptr;

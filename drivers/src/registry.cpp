@@ -17,6 +17,8 @@ const ProtocolInfo kProtocols[] = {
     {"ds4", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
     {"dualsense", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
     {"joycon", ProtocolInfo::kHid, 0, 1, make_joycon_decoder, joycon_setup},
+    {"slimevr", ProtocolInfo::kUdp, 0, 1, make_slimevr_decoder, nullptr},
+    {"slimevr_hid", ProtocolInfo::kHid, 0, 1, make_slimevr_hid_decoder, nullptr},
 };
 }  // namespace
 
@@ -80,6 +82,7 @@ std::string serial_link_warning(const DeviceSpec& spec) {
 
 std::unique_ptr<Device> make_device(const DeviceSpec& spec, Logger log) {
   const ProtocolInfo& info = require_protocol(spec);
+  if (info.transport == ProtocolInfo::kUdp) return make_slimevr_device(spec, std::move(log));
   auto decoder = info.make_decoder(spec);
   if (spec.port.empty()) throw std::invalid_argument("device " + spec.name + ": no port given");
   TransportOpener opener;

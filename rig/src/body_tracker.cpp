@@ -1,4 +1,5 @@
-// BodyTracker: gyro scale -> filter -> calibration capture -> skeleton, for one rig.
+// BodyTracker: gyro scale -> filter (or the sensor's own orientation) -> calibration capture ->
+// skeleton, for one rig.
 #include "mocap/rig/body_tracker.hpp"
 
 #include <algorithm>
@@ -54,10 +55,13 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       calibrator_(rig_mapping(sensors_), calibrator_options(sensors_, opt_)),
       heading_(opt_.heading_from_motion),
       has_mag_(sensors_.size(), false),
+      is_source_(sensors_.size(), false),
+      q_source_(sensors_.size(), Eigen::Quaterniond::Identity()),
       prev_w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
       prev_w_t_ns_(sensors_.size(), 0) {}
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
+  if (is_source_[static_cast<size_t>(i)]) return q_source_[static_cast<size_t>(i)];
   const AttitudeFilter& f = filters_[static_cast<size_t>(i)];
   return opt_.use_mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();
 }
@@ -86,8 +90,14 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
   if (s.has(kFieldMag)) has_mag_[static_cast<size_t>(i)] = true;
   s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(sensor.gyr_scale);
   if (!opt_.use_mag) s.valid = static_cast<uint8_t>(s.valid & ~kFieldMag);
-  // 2. Filter.
-  f.update(s);
+  // 2. Filter; an orientation source (a tracker running its own filter, sending its
+  //    orientation without rates: kFieldQuat and no gyro) stands in for it.
+  if (s.has(kFieldQuat) && !s.has(kFieldGyr)) {
+    q_source_[static_cast<size_t>(i)] = s.q_device_sensor;
+    is_source_[static_cast<size_t>(i)] = true;
+  } else {
+    f.update(s);
+  }
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
   const int seg = sensor.segment;
   if (seg < 0) return;

@@ -1,5 +1,5 @@
-// `mocap bench latency|capacity|replay|record` in tiny configurations: they run, exit 0 and print one
-// JSON object whose counts are consistent. No timing is asserted (shared machines).
+// `mocap bench latency [--protocol slimevr]|capacity|replay|record` in tiny configurations: they
+// run, exit 0 and print one JSON object whose counts are consistent. No timing is asserted (shared machines).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -31,6 +31,19 @@ TEST(BenchDaemon, LatencyMatchesEveryWrite) {
   EXPECT_GE(l.at("p50").get<double>(), 0.0);
   EXPECT_LE(l.at("p50").get<double>(), l.at("p99").get<double>());
   EXPECT_LE(l.at("p99").get<double>(), l.at("max").get<double>());
+  EXPECT_TRUE(j.at("pass").is_boolean());
+}
+
+TEST(BenchDaemon, LatencySlimeVrRunsBothPaths) {
+  const auto j = run_bench("latency --protocol slimevr --sensors 3 --rate 50 --seconds 1");
+  EXPECT_EQ(j.at("protocol"), "slimevr");
+  for (const char* path : {"slimevr", "witmotion"}) {
+    const auto& p = j.at(path);
+    EXPECT_EQ(p.at("written").get<int>(), 150) << path;
+    EXPECT_EQ(p.at("matched").get<int>() + p.at("unmatched").get<int>(), 150) << path;
+    EXPECT_GT(p.at("matched").get<int>(), 0) << path;
+  }
+  EXPECT_GT(j.at("p99_ratio_slimevr_to_witmotion").get<double>(), 0.0);
   EXPECT_TRUE(j.at("pass").is_boolean());
 }
 

@@ -1,5 +1,6 @@
 // BodyTracker: the invariant that no body-level correction changes a segment's motion (each is
-// its own sensor's filter output through the calibration), 6D calibration without refusal.
+// its own sensor's filter output through the calibration), 6D calibration without refusal,
+// orientation sources (the sensor's own orientation in place of the filter).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -121,6 +122,52 @@ TEST(BodyTracker, SixDCalibratesWithoutAMagnetometerAndMarksTheBorrowedHeadings)
 // calibrated as 6D, never refused.
 TEST(BodyTracker, SensorsWithoutMagnetometerSamplesAreTakenAsSixD) {
   six_d_calibration(true);
+}
+
+// Orientation sources (SlimeVR trackers: the orientation computed on the tracker, no rates):
+// the tracker uses the sent orientation as is (its filter never runs), calibrates them like 6D
+// sensors, and each segment is that orientation through the calibration.
+TEST(BodyTracker, OrientationSourcesSkipTheFilterAndCalibrate) {
+  Rig rig;
+  TrackerOptions o;
+  o.calibrator.heading = HeadingSource::mount_normals;
+  o.calibrator.capture_s = 1.0;
+  BodyTracker tracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
+  tracker.start_calibration(CalibrationPose::npose, 500'000'000);
+  std::optional<CalibrationResult> res;
+  const Eigen::Vector3d w_earth(0.3, -0.2, 0.8);
+  PoseFrame frame;
+  int checked = 0;
+  for (int k = 0; k < 400; ++k) {
+    const int64_t t = static_cast<int64_t>(k) * 10'000'000;
+    const double turn_s = std::max(0.0, k * 0.01 - 2.0);
+    const Eigen::Quaterniond r(Eigen::AngleAxisd(turn_s * w_earth.norm(), w_earth.normalized()));
+    for (int i = 0; i < 3; ++i) {
+      ImuSample s;
+      s.sensor_id = static_cast<uint16_t>(i);
+      s.t_host_ns = t;
+      s.q_device_sensor = r * rig.q_earth_sensor0[i];
+      s.acc_m_s2 = s.q_device_sensor.conjugate() * Eigen::Vector3d(0, 0, 9.81);
+      s.valid = kFieldQuat | kFieldAcc;
+      tracker.on_sample(i, s);
+      EXPECT_TRUE(tracker.orientation_source(i));
+      EXPECT_LT(tracker.q_earth_sensor(i).angularDistance(s.q_device_sensor), 1e-12);
+      if (!res) res = tracker.take_calibration_result();
+    }
+    tracker.solve(t, frame);
+    const Calibration& c = tracker.skeleton().calibration();
+    if (!c.valid) continue;
+    for (int i = 0; i < 3; ++i) {
+      const int seg = tracker.sensor(i).segment;
+      const Eigen::Quaterniond want = c.segment_from_sensor(seg, tracker.q_earth_sensor(i));
+      EXPECT_LT(tracker.skeleton().q_earth_segment()[seg].angularDistance(want), 1e-12);
+    }
+    ++checked;
+  }
+  ASSERT_TRUE(res && res->ok()) << (res ? res->message : "no result");
+  EXPECT_GT(checked, 200);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(tracker.filter(i).counters().gyr_ok, 0u) << "the filter never ran";
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // mocap devices: lists connected serial, HID and USB devices that match a known driver, with the
-// rig-config snippet to use each; --watch prints USB attach/detach events (libusb hot-plug).
+// rig-config snippet to use each, and the SlimeVR trackers heard saying hello on UDP 6969;
+// --watch prints USB attach/detach events (libusb hot-plug).
 #include <signal.h>
 
 #include <cstdio>
@@ -8,14 +9,44 @@
 #include "commands.hpp"
 #include "mocap/core/cli.hpp"
 #include "mocap/drivers/known_devices.hpp"
+#include "mocap/drivers/slimevr_listen.hpp"
 
 namespace mocap::cmd {
 
 namespace {
 
+/// The SlimeVR boards heard saying hello (handshake broadcasts of trackers not yet connected),
+/// each with the rig snippet of its main IMU.
+void list_slimevr(int port, double seconds) {
+  std::string err;
+  const std::string addr = "0.0.0.0:" + std::to_string(port);
+  const auto hellos = listen_slimevr_hellos(addr, static_cast<int>(seconds * 1000), err);
+  if (!err.empty()) {
+    std::printf(
+        "# SlimeVR: cannot listen on udp %s (%s); if mocapd runs there, `mocapctl "
+        "status` shows its trackers\n",
+        addr.c_str(), err.c_str());
+    return;
+  }
+  if (hellos.empty())
+    std::printf("# SlimeVR: no tracker said hello on udp %s in %.1f s\n", addr.c_str(), seconds);
+  for (const auto& h : hellos) {
+    std::printf(
+        "# slimevr: tracker %s at %s (board %u, IMU %u, MCU %u, firmware \"%s\", protocol %u)\n",
+        h.mac.c_str(), h.ip.c_str(), h.board, h.imu, h.mcu, h.firmware.c_str(), h.protocol_version);
+    std::printf(
+        "[[sensor]]\nname = \"slime_%s\"\ndriver = \"slimevr\"\nport = \"udp:%s\"\n"
+        "segment = \"pelvis\"  # choose the body segment\n"
+        "options = { mac = \"%s\", tracker = 0 }  # tracker = 1: the extension IMU\n\n",
+        h.mac.substr(12, 2).append(h.mac.substr(15, 2)).c_str(), addr.c_str(), h.mac.c_str());
+  }
+}
+
 /// mocap devices' command line (declared in add_devices).
 struct DevicesOptions {
   bool watch = false, known = false;
+  double slimevr_listen_s = 1.5;
+  int slimevr_port = 6969;
 };
 
 int run_devices(const DevicesOptions& o) {
@@ -45,6 +76,7 @@ int run_devices(const DevicesOptions& o) {
     if (proto == "xbus") std::printf("baud = 115200\n");
     std::printf("segment = \"pelvis\"  # choose the body segment\n\n");
   }
+  if (o.slimevr_listen_s > 0) list_slimevr(o.slimevr_port, o.slimevr_listen_s);
   if (!o.watch) return 0;
   sigset_t stop;
   sigemptyset(&stop);
@@ -76,6 +108,11 @@ void add_devices(CLI::App& app, int& exit_code) {
   c->add_flag("--watch", o->watch,
               "after listing, print USB attach/detach of known devices until interrupted");
   c->add_flag("--known", o->known, "print the table of known USB ids");
+  c->add_option("--slimevr-listen", o->slimevr_listen_s,
+                "seconds to listen for SlimeVR trackers' hello (0 = no)")
+      ->check(CLI::Range(0.0, 600.0));
+  c->add_option("--slimevr-port", o->slimevr_port, "UDP port of the SlimeVR trackers' hello")
+      ->check(CLI::Range(1, 65535));
   c->callback([o, &exit_code] { exit_code = run_devices(*o); });
 }
 

@@ -4,6 +4,7 @@
 #include <signal.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -11,6 +12,7 @@
 #include "commands.hpp"
 #include "mocap/core/cli.hpp"
 #include "mocap/devsim/sim_device.hpp"
+#include "mocap/devsim/sim_slimevr.hpp"
 
 namespace mocap::cmd {
 
@@ -19,7 +21,9 @@ namespace {
 constexpr const char* kSimulateUsage =
     "  --pty prints the slave path (\"pty: /dev/pts/N\") and runs until interrupted.\n"
     "  --out writes a capture: the byte stream, or for HID protocols each report prefixed by\n"
-    "  one length byte (the format the fuzz corpora and report-byte tests use).\n";
+    "  one length byte (the format the fuzz corpora and report-byte tests use).\n"
+    "  slimevr: a tracker board speaking to the server at --udp HOST:PORT (handshake, then\n"
+    "  rotation + acceleration); --option mac=AA:BB:CC:DD:EE:FF, --option sensors=N (IMUs).\n";
 
 bool parse_kv(const std::vector<std::string>& items, std::map<std::string, std::string>& out) {
   for (const auto& kv : items) {
@@ -74,6 +78,47 @@ int write_capture(const std::string& protocol, const std::string& motion_spec, d
   return 0;
 }
 
+/// A SlimeVR tracker board: its own connection logic over UDP (not SimulatedDevice's one-way
+/// stream), until the duration passes or a stop signal arrives.
+int run_slimevr(const SimOptions& so, double duration, sigset_t& stop_signals) {
+  if (so.udp.empty()) {
+    std::fprintf(stderr, "mocap simulate: slimevr trackers talk UDP: give --udp HOST:PORT\n");
+    return 2;
+  }
+  SimSlimeOptions o;
+  o.server = so.udp;
+  o.rate_hz = so.rate_hz;
+  o.motion = so.motion;
+  for (const auto& [k, v] : so.options) {
+    if (k == "mac") {
+      o.mac = v;
+    } else if (k == "sensors") {
+      o.sensors = std::atoi(v.c_str());
+    } else {
+      std::fprintf(stderr, "mocap simulate: slimevr has no option '%s' (mac, sensors)\n",
+                   k.c_str());
+      return 2;
+    }
+  }
+  SimSlimeTracker t(o);
+  std::printf("udp: slimevr tracker %s (%d sensors) to %s\n", o.mac.c_str(), o.sensors,
+              o.server.c_str());
+  std::fflush(stdout);
+  t.start();
+  timespec ts{static_cast<time_t>(duration),
+              static_cast<long>((duration - static_cast<time_t>(duration)) * 1e9)};
+  if (duration > 0)
+    sigtimedwait(&stop_signals, nullptr, &ts);
+  else
+    sigwaitinfo(&stop_signals, nullptr);
+  t.stop();
+  std::fprintf(stderr, "mocap simulate: sent %llu samples per sensor (%s, %llu handshakes)\n",
+               static_cast<unsigned long long>(t.samples()),
+               t.connected() ? "connected" : "never answered",
+               static_cast<unsigned long long>(t.handshakes()));
+  return 0;
+}
+
 /// mocap simulate's command line (declared in add_simulate).
 struct SimulateOptions {
   SimOptions sim;
@@ -97,6 +142,7 @@ int run_simulate(SimulateOptions& o) {
     sigaddset(&stop_signals, SIGINT);
     sigaddset(&stop_signals, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+    if (so.protocol == "slimevr") return run_slimevr(so, duration, stop_signals);
     SimulatedDevice sim(so);
     if (so.udp.empty())
       std::printf("pty: %s\n", sim.path().c_str());
@@ -129,7 +175,7 @@ void add_simulate(CLI::App& app, int& exit_code) {
   CLI::App* c = cli::add_command(app, "simulate",
                                  "emulate a device: protocol bytes on a pty, as UDP or to a file");
   c->footer(kSimulateUsage);
-  c->add_option("--protocol", o->sim.protocol, "witmotion|xbus|ds4|dualsense|joycon|line")
+  c->add_option("--protocol", o->sim.protocol, "witmotion|xbus|ds4|dualsense|joycon|line|slimevr")
       ->required();
   CLI::Option* pty = c->add_flag(
       "--pty", o->pty, "emit on a new pseudo-terminal (one destination: --pty, --udp or --out)");

@@ -30,5 +30,6 @@ std::unique_ptr<ProtocolEncoder> make_xbus_encoder(const EncoderOptions& opt);
 std::unique_ptr<ProtocolEncoder> make_playstation_encoder(const EncoderOptions& opt,
                                                           bool dualsense);
 std::unique_ptr<ProtocolEncoder> make_joycon_encoder(const EncoderOptions& opt);
+std::unique_ptr<ProtocolEncoder> make_slimevr_hid_encoder(const EncoderOptions& opt);
 
 }  // namespace mocap

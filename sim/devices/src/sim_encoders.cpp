@@ -16,8 +16,10 @@ std::unique_ptr<ProtocolEncoder> make_encoder(std::string_view protocol,
   if (protocol == "ds4") return make_playstation_encoder(opt, false);
   if (protocol == "dualsense") return make_playstation_encoder(opt, true);
   if (protocol == "joycon") return make_joycon_encoder(opt);
+  if (protocol == "slimevr_hid") return make_slimevr_hid_encoder(opt);
   throw std::invalid_argument("simulated device: unknown protocol \"" + std::string(protocol) +
-                              "\" (known: witmotion, xbus, ds4, dualsense, joycon, line)");
+                              "\" (known: witmotion, xbus, ds4, dualsense, joycon, line, "
+                              "slimevr_hid; slimevr boards: SimSlimeTracker)");
 }
 
 }  // namespace mocap

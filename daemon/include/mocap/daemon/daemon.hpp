@@ -59,8 +59,13 @@ class Service {
 
 /// The sensors of a config as the pipeline sees them.
 std::vector<SensorInfo> sensor_infos(const Config& cfg);
-/// The DeviceSpec of sensor i of a config (its device index and sensor id are i).
+/// The DeviceSpec of sensor i of a config (its device index and sensor id are i). SlimeVR
+/// trackers on one port share a device: the spec of the group's first sensor maps them all
+/// (options "trackers" = "MAC/SENSOR=INDEX@AXIS_REMAP;...").
 DeviceSpec device_spec(const Config& cfg, size_t i);
+/// The sensor whose device carries sensor i's samples: i itself, or the first SlimeVR sensor
+/// on the same port.
+size_t device_leader(const Config& cfg, size_t i);
 
 class Daemon {
  public:

@@ -56,6 +56,9 @@ class Pipeline final : public SampleSink {
   void on_sample(const ImuSample& sample) override;
   void on_raw(uint16_t device_index, int64_t t_host_ns, std::span<const uint8_t> bytes) override;
   void on_connection(uint16_t device_index, bool connected, std::string_view reason) override;
+  /// A sensor's reset button: full = calibrate in the configured pose (as `mocapctl calibrate`),
+  /// heading = `mocapctl reset-heading`.
+  void on_reset_request(uint16_t device_index, ResetRequest what) override;
 
   /// Maps device index -> sensor index for connection reports (default identity).
   void set_device_sensor(uint16_t device_index, int sensor);
@@ -93,6 +96,7 @@ class Pipeline final : public SampleSink {
   void snapshot();
 
   PipelineConfig cfg_;
+  CalibrationPose reset_pose_ = CalibrationPose::npose;  ///< the configured calibration pose
   Logger log_;
   PipelineCore core_;
   std::vector<std::unique_ptr<Slot>> slots_;

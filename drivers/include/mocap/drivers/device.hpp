@@ -18,6 +18,9 @@
 
 namespace mocap {
 
+/// Resets a sensor can ask for: a full one (the rig's calibration pose) or the heading only.
+enum class ResetRequest : uint8_t { full, heading };
+
 /// What a device's reader thread reports. Called from that thread only: implementations must
 /// be quick and must not block (push into a lock-free ring and return).
 class SampleSink {
@@ -31,12 +34,14 @@ class SampleSink {
   /// Connection state changes: connected = false when the device vanished (with a reason).
   virtual void on_connection(uint16_t /*device_index*/, bool /*connected*/,
                              std::string_view /*reason*/) {}
+  /// A sensor asked for a reset (a SlimeVR tracker's button: packet 21). Quick, non-blocking.
+  virtual void on_reset_request(uint16_t /*device_index*/, ResetRequest /*what*/) {}
 };
 
 /// How to reach and decode one device. Parsed from the daemon config; also built by tests.
 struct DeviceSpec {
   std::string name;      ///< unique name from the rig, e.g. "wt901_left_arm"
-  std::string protocol;  ///< "witmotion", "xbus", "ds4", "dualsense", "joycon", "line", ...
+  std::string protocol;  ///< "witmotion", "xbus", "ds4", "dualsense", "joycon", "line", "slimevr"
   /// Where: a serial path ("/dev/ttyUSB0", "/dev/pts/3"), "usb:VID:PID[:SERIAL]" for a serial
   /// adapter or raw USB device found by ids, "hid:VID:PID[:SERIAL]", or "udp:HOST:PORT" to bind.
   std::string port;

@@ -1,6 +1,8 @@
 // The body tracker: inertial samples in, a posture out. It owns, in this order per sample:
 //   1. the sensor's gyro scale (its one-time table-spin calibration, divided out),
-//   2. the sensor's AttitudeFilter (9D, or 6D without magnetometers),
+//   2. the sensor's AttitudeFilter (9D, or 6D without magnetometers), or for an orientation
+//      source (a sample with q_device_sensor and no gyro, e.g. a SlimeVR tracker) its own
+//      orientation (z-up earth frame, heading its own, aligned at calibration like 6D),
 //   3. the calibration capture (N-/T-pose, Calibrator), which turns each sensor's orientation
 //      into its segment's (mounting, and in 6D each sensor's own heading from its site normal),
 //   4. in 6D, the heading alignment from motion of the sensors whose site normal is vertical
@@ -86,8 +88,11 @@ class BodyTracker {
   const TrackerOptions& options() const { return opt_; }
   /// The sensor's health (its filter's state as the tracker uses it, and its calibration).
   SensorHealth sensor_health(int i) const;
-  /// The sensor's earth-frame orientation as the tracker uses it (9D or 6D output).
+  /// The sensor's earth-frame orientation as the tracker uses it (9D or 6D output, or an
+  /// orientation source's own).
   Eigen::Quaterniond q_earth_sensor(int i) const;
+  /// True once sensor i sent its own orientation instead of rates (its filter stays unused).
+  bool orientation_source(int i) const { return is_source_[static_cast<size_t>(i)]; }
   /// Newest sample time seen.
   int64_t newest_t_ns() const { return newest_t_ns_; }
 
@@ -100,7 +105,9 @@ class BodyTracker {
   std::optional<CalibrationResult> result_;
   int64_t newest_t_ns_ = 0;
   HeadingFromMotion heading_;
-  std::vector<bool> has_mag_;  ///< per sensor: a magnetometer sample has arrived
+  std::vector<bool> has_mag_;                 ///< per sensor: a magnetometer sample has arrived
+  std::vector<bool> is_source_;               ///< per sensor: an orientation source
+  std::vector<Eigen::Quaterniond> q_source_;  ///< its newest orientation
   /// Per segment: its sensor's filter has a heading frame of its own (6D, or no magnetometer).
   std::array<bool, kSegmentCount> own_heading_frames() const;
   int64_t heading_applied_t_ns_ = 0;
