@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "../common/e2e_process.hpp"
 #include "mocap/daemon/control.hpp"
 #include "mocap/session/session_reader.hpp"
 #include "mocap/skeleton/body_model.hpp"
@@ -37,37 +38,11 @@ using namespace std::chrono_literals;
 
 namespace {
 
-const std::string kBin = std::string(MOCAP_BINARY_DIR) + "/bin/";
-
-pid_t spawn(const std::vector<std::string>& argv, const std::string& out_file = "") {
-  std::vector<char*> a;
-  for (const auto& s : argv)
-    a.push_back(const_cast<char*>(s.c_str()));
-  a.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  if (!out_file.empty()) {
-    posix_spawn_file_actions_addopen(&fa, 1, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, (out_file + ".err").c_str(),
-                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  }
-  pid_t pid = -1;
-  EXPECT_EQ(posix_spawn(&pid, a[0], &fa, nullptr, a.data(), environ), 0) << argv[0];
-  posix_spawn_file_actions_destroy(&fa);
-  return pid;
-}
-
-int wait_exit(pid_t pid, int timeout_s = 30) {
-  for (int i = 0; i < timeout_s * 100; ++i) {
-    int st = 0;
-    if (waitpid(pid, &st, WNOHANG) == pid)
-      return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    std::this_thread::sleep_for(10ms);
-  }
-  kill(pid, SIGKILL);
-  waitpid(pid, nullptr, 0);
-  return -1;
-}
+const std::string kBin = mocap::test::kBinDir;
+using mocap::test::read_json_lines;
+using mocap::test::slurp;
+using mocap::test::spawn;
+using mocap::test::wait_exit;
 
 int run(const std::vector<std::string>& argv, std::string* out = nullptr) {
   const std::string f =
@@ -82,13 +57,6 @@ int run(const std::vector<std::string>& argv, std::string* out = nullptr) {
   return rc;
 }
 
-std::string slurp(const std::string& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 uint16_t free_port() {
   int fd = socket(AF_INET, SOCK_STREAM, 0);
   sockaddr_in a{};
@@ -99,37 +67,6 @@ uint16_t free_port() {
   getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n);
   close(fd);
   return ntohs(a.sin_port);
-}
-
-/// Reads `count` JSON lines from the pose stream.
-std::vector<nlohmann::json> read_lines(uint16_t port, int count) {
-  std::vector<nlohmann::json> out;
-  int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(port);
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
-    close(fd);
-    return out;
-  }
-  std::string buf;
-  char chunk[8192];
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (static_cast<int>(out.size()) < count && std::chrono::steady_clock::now() < deadline) {
-    pollfd p{fd, POLLIN, 0};
-    if (poll(&p, 1, 500) <= 0) continue;
-    const ssize_t n = recv(fd, chunk, sizeof chunk, 0);
-    if (n <= 0) break;
-    buf.append(chunk, static_cast<size_t>(n));
-    size_t nl;
-    while ((nl = buf.find('\n')) != std::string::npos && static_cast<int>(out.size()) < count) {
-      out.push_back(nlohmann::json::parse(buf.substr(0, nl)));
-      buf.erase(0, nl + 1);
-    }
-  }
-  close(fd);
-  return out;
 }
 
 }  // namespace
@@ -161,7 +98,7 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   EXPECT_TRUE(st["demo"].get<bool>());
 
   // The pose stream: frames increase, quaternions are unit, sensors listed.
-  auto lines = read_lines(port, 20);
+  auto lines = read_json_lines(port, 20);
   ASSERT_EQ(lines.size(), 20u);
   for (size_t i = 1; i < lines.size(); ++i)
     EXPECT_GT(lines[i]["frame"], lines[i - 1]["frame"]);
@@ -249,8 +186,8 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
                   &out),
               0)
         << out;
-    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mocapses").string(), "--source", source, "--csv",
-                   p2, "--bvh", (dir / "a.bvh").string(), "--quiet"}),
+    ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mocapses").string(), "--source", source,
+                   "--csv", p2, "--bvh", (dir / "a.bvh").string(), "--quiet"}),
               0);
     const std::string a = slurp(p1), b = slurp(p2);
     EXPECT_GT(a.size(), 10000u);
@@ -389,7 +326,7 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
   EXPECT_NE(table.find("calibration: calibrated in npose"), std::string::npos) << table;
   EXPECT_NE(table.find("furthest from the npose"), std::string::npos) << table;
 
-  auto lines = read_lines(port, 60);
+  auto lines = read_json_lines(port, 60);
   ASSERT_EQ(lines.size(), 60u);
   for (const auto& l : lines) {
     std::map<std::string, nlohmann::json> seg;
@@ -453,7 +390,7 @@ TEST(Mocapd, DemoPlaysABvhFileWithItsBones) {
                                  .joint_offset_m[mocap::index(mocap::Segment::foot_l)]
                                  .norm();
   ASSERT_GT(shank_175_m - shank_160_m, 0.03);
-  const auto lines = read_lines(port, 30);
+  const auto lines = read_json_lines(port, 30);
   ASSERT_EQ(lines.size(), 30u);
   for (const auto& l : lines) {
     std::map<std::string, nlohmann::json> seg;
@@ -607,7 +544,7 @@ TEST(Mocapd, ReplaySetWithoutConfigChangesTheRecordedConfiguration) {
   std::vector<nlohmann::json> lines;
   for (int i = 0; i < 50 && lines.empty(); ++i) {  // until the daemon listens
     std::this_thread::sleep_for(100ms);
-    lines = read_lines(port, 5);
+    lines = read_json_lines(port, 5);
   }
   EXPECT_EQ(lines.size(), 5u);
   // A replay gives the recorded wall clock back: the session's realtime - monotonic offset.

@@ -78,9 +78,19 @@ int write_capture(const std::string& protocol, const std::string& motion_spec, d
   return 0;
 }
 
+/// Returns after duration_s (0: never) or when one of the (blocked) stop signals arrives.
+void wait_for_stop(const sigset_t& stop_signals, double duration_s) {
+  const timespec ts{static_cast<time_t>(duration_s),
+                    static_cast<long>((duration_s - static_cast<time_t>(duration_s)) * 1e9)};
+  if (duration_s > 0)
+    sigtimedwait(&stop_signals, nullptr, &ts);
+  else
+    sigwaitinfo(&stop_signals, nullptr);
+}
+
 /// A SlimeVR tracker board: its own connection logic over UDP (not SimulatedDevice's one-way
 /// stream), until the duration passes or a stop signal arrives.
-int run_slimevr(const SimOptions& so, double duration, sigset_t& stop_signals) {
+int run_slimevr(const SimOptions& so, double duration, const sigset_t& stop_signals) {
   if (so.udp.empty()) {
     std::fprintf(stderr, "mocap simulate: slimevr trackers talk UDP: give --udp HOST:PORT\n");
     return 2;
@@ -105,12 +115,7 @@ int run_slimevr(const SimOptions& so, double duration, sigset_t& stop_signals) {
               o.server.c_str());
   std::fflush(stdout);
   t.start();
-  timespec ts{static_cast<time_t>(duration),
-              static_cast<long>((duration - static_cast<time_t>(duration)) * 1e9)};
-  if (duration > 0)
-    sigtimedwait(&stop_signals, nullptr, &ts);
-  else
-    sigwaitinfo(&stop_signals, nullptr);
+  wait_for_stop(stop_signals, duration);
   t.stop();
   std::fprintf(stderr, "mocap simulate: sent %llu samples per sensor (%s, %llu handshakes)\n",
                static_cast<unsigned long long>(t.samples()),
@@ -150,12 +155,7 @@ int run_simulate(SimulateOptions& o) {
       std::printf("udp: sending %s to %s\n", so.protocol.c_str(), so.udp.c_str());
     std::fflush(stdout);
     sim.start();
-    timespec ts{static_cast<time_t>(duration),
-                static_cast<long>((duration - static_cast<time_t>(duration)) * 1e9)};
-    if (duration > 0)
-      sigtimedwait(&stop_signals, nullptr, &ts);
-    else
-      sigwaitinfo(&stop_signals, nullptr);
+    wait_for_stop(stop_signals, duration);
     sim.stop();
     std::fprintf(stderr, "mocap simulate: sent %llu samples (%llu withheld)\n",
                  static_cast<unsigned long long>(sim.samples()),
