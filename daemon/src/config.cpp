@@ -336,12 +336,7 @@ class TableReader {
   std::vector<std::string> known_;  // owned: some keys are built at run time
 };
 
-/// The shortest text that reads back as exactly `v`.
-std::string number_text(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
+using keys::number_text;
 
 /// A scalar's text: strings as they are, numbers (shortest exact text) and booleans as TOML
 /// writes them.

@@ -18,6 +18,8 @@
 // the filter module's own table (filter_param_names.hpp), not from here.
 #include "config_keys.hpp"
 
+#include <charconv>
+
 #include "mocap/core/thread_priority.hpp"
 #include "mocap/skeleton/config_tables.hpp"
 
@@ -28,6 +30,12 @@ namespace mocap::daemon::keys {
   +[](S & s) -> auto& { \
     return s.m;         \
   }
+
+std::string number_text(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
 
 std::vector<std::string_view> split_choices(std::string_view choices) {
   std::vector<std::string_view> out;

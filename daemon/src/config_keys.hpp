@@ -120,5 +120,7 @@ bool enum_from_name(std::string_view name, E& out) {
 
 /// "a, b, c" split at commas and spaces.
 std::vector<std::string_view> split_choices(std::string_view choices);
+/// The shortest text that reads back as exactly `v`.
+std::string number_text(double v);
 
 }  // namespace mocap::daemon::keys

@@ -11,11 +11,7 @@
 namespace mocap::daemon {
 namespace {
 
-std::string number_text(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
+using keys::number_text;
 
 /// A range bound: whole numbers in full ("4000000", not "4e+06").
 std::string bound_text(double v) {
