@@ -147,7 +147,9 @@ void add_capacity(CLI::App& bench, int& exit_code) {
   c->add_option("--sensors", o->sensors, "number of simulated sensors")->check(CLI::Range(1, 64));
   c->add_option("--rate", o->rate_hz, "sample rate per sensor, Hz")
       ->check(CLI::Range(1e-9, 4000.0));
-  c->add_option("--seconds", o->seconds, "measured duration, s")->check(CLI::Range(1.0, 1e6));
+  cli::add_deprecated_alias(
+      *c, "--seconds", o->seconds,
+      c->add_option("--duration", o->seconds, "measured duration, s")->check(CLI::Range(1.0, 1e6)));
   c->callback([o, &exit_code] { exit_code = run_capacity(*o); });
 }
 

@@ -316,7 +316,9 @@ void add_latency(CLI::App& bench, int& exit_code) {
   CLI::Option* rate =
       c->add_option("--rate", o->rate_hz, "sample rate per sensor, Hz (slimevr: 100 unless given)")
           ->check(CLI::Range(1e-9, 2000.0));
-  c->add_option("--seconds", o->seconds, "measured duration, s")->check(CLI::PositiveNumber);
+  cli::add_deprecated_alias(
+      *c, "--seconds", o->seconds,
+      c->add_option("--duration", o->seconds, "measured duration, s")->check(CLI::PositiveNumber));
   c->add_option("--realtime-priority", o->rt_priority,
                 "SCHED_FIFO priority for mocapd and the bench threads, 0 = normal")
       ->check(CLI::Range(0, kMaxRealtimePriority));

@@ -237,8 +237,10 @@ void add_record(CLI::App& bench, int& exit_code) {
       bench, "record",
       "session block compression (zstd levels vs none): size ratio and writer CPU");
   c->add_option("SESSION", o->session, "a recorded session to re-write (default: record the demo)");
-  c->add_option("--seconds", o->seconds, "length of the demo recording to make")
-      ->check(CLI::Range(2.0, 3600.0));
+  cli::add_deprecated_alias(
+      *c, "--seconds", o->seconds,
+      c->add_option("--duration", o->seconds, "length of the demo recording to make")
+          ->check(CLI::Range(2.0, 3600.0)));
   c->add_option("--repeat", o->repeat, "write each setting this many times, keep the least CPU")
       ->check(CLI::Range(1.0, 20.0));
   c->add_option("--dir", o->dir, "where to write the files; removed afterwards");

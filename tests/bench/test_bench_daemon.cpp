@@ -22,7 +22,7 @@ nlohmann::json run_bench(const std::string& args) {
 }
 
 TEST(BenchDaemon, LatencyMatchesEveryWrite) {
-  const auto j = run_bench("latency --sensors 3 --rate 50 --seconds 1");
+  const auto j = run_bench("latency --sensors 3 --rate 50 --duration 1");
   EXPECT_EQ(j.at("benchmark"), "latency");
   EXPECT_EQ(j.at("written").get<int>(), 150);
   EXPECT_EQ(j.at("matched").get<int>() + j.at("unmatched").get<int>(), 150);
@@ -35,7 +35,7 @@ TEST(BenchDaemon, LatencyMatchesEveryWrite) {
 }
 
 TEST(BenchDaemon, LatencySlimeVrRunsBothPaths) {
-  const auto j = run_bench("latency --protocol slimevr --sensors 3 --rate 50 --seconds 1");
+  const auto j = run_bench("latency --protocol slimevr --sensors 3 --rate 50 --duration 1");
   EXPECT_EQ(j.at("protocol"), "slimevr");
   for (const char* path : {"slimevr", "witmotion"}) {
     const auto& p = j.at(path);
@@ -48,7 +48,7 @@ TEST(BenchDaemon, LatencySlimeVrRunsBothPaths) {
 }
 
 TEST(BenchDaemon, CapacityCountsSamples) {
-  const auto j = run_bench("capacity --sensors 3 --rate 100 --seconds 1");
+  const auto j = run_bench("capacity --sensors 3 --rate 100 --duration 1");
   EXPECT_EQ(j.at("benchmark"), "capacity");
   const auto& s = j.at("samples");
   EXPECT_EQ(s.at("written").get<int>(), 300);
@@ -71,7 +71,7 @@ TEST(BenchDaemon, ReplayReplaysEverySample) {
 }
 
 TEST(BenchDaemon, RecordCompressesEverySettingWithoutDrops) {
-  const auto j = run_bench("record --seconds 3 --repeat 1");
+  const auto j = run_bench("record --duration 3 --repeat 1");
   EXPECT_EQ(j.at("benchmark"), "record");
   EXPECT_GT(j.at("input").at("poses").get<int>(), 0);
   EXPECT_GT(j.at("input").at("raw").get<int>(), 0);

@@ -109,9 +109,10 @@ void add_perform(CLI::App& app, int& exit_code) {
   c->add_option("--seed", o->seed, "random seed of the sensor errors and mountings")
       ->check(CLI::NonNegativeNumber);
   c->add_option("--rate", o->pp.rate_hz, "sensor sample rate, Hz")->check(CLI::PositiveNumber);
-  c->add_option("--body-height,--height", o->pp.height_m,
-                "performer height, m (a BVH file brings its own bones)")
-      ->check(CLI::Range(0.5, 2.6));
+  CLI::Option* height = c->add_option("--body-height", o->pp.height_m,
+                                      "performer height, m (a BVH file brings its own bones)")
+                            ->check(CLI::Range(0.5, 2.6));
+  cli::add_deprecated_alias(*c, "--height", o->pp.height_m, height);
   c->add_option("--disturbance", o->disturbance, "magnetic disturbance: none|magnet|desk|both");
   c->add_flag("--ideal", o->ideal, "ideal sensors (no noise, bias, scale error, misalignment)");
   c->add_option("--duration", o->duration_s, "seconds to perform (default: the motion's length)")

@@ -92,8 +92,10 @@ void declare_options(CLI::App& app, ViewerOptions& o, Flags& f) {
       ->check(CLI::Range(1, 1000000));
   app.add_option("--wait", o.wait_s, "screenshot: seconds to wait for a live source's first pose")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--bench-seconds", o.bench_seconds, "seconds per benchmark case")
-      ->check(CLI::PositiveNumber);
+  cli::add_deprecated_alias(
+      app, "--bench-seconds", o.bench_seconds,
+      app.add_option("--bench-duration", o.bench_seconds, "seconds per benchmark case (--bench)")
+          ->check(CLI::PositiveNumber));
   CLI::Option* socket = app.add_option(
       "--socket", o.control_socket, "daemon control socket (default $XDG_RUNTIME_DIR/mocapd.sock)");
   cli::add_deprecated_alias(app, "--control", f.control_alias, socket);
