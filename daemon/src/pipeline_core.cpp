@@ -137,7 +137,12 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
   engine_.build_frame(t_frame_ns, frame_);
   frame_.frame = ++frame_no_;
   frame_.t_ns = t_frame_ns;
-  frame_.t_unix_ns = unix_offset_known_ ? t_frame_ns + unix_offset_ns_ : 0;
+  // 0 (unknown) too when a recording's offset is absurd enough to overflow.
+  int64_t t_unix_ns = 0;
+  frame_.t_unix_ns =
+      unix_offset_known_ && !__builtin_add_overflow(t_frame_ns, unix_offset_ns_, &t_unix_ns)
+          ? t_unix_ns
+          : 0;
   frame_.flags = (frame_.flags & kFrameCalibrated) | extra_flags_;
   if (calibrating_) {
     frame_.flags |= kFrameCalibrating;

@@ -405,7 +405,10 @@ bool SessionReader::deliver(const Block& block) {
     damage_open_ = false;
   }
   if (block.type == BlockType::clock) {  // absorbed: the offset for the blocks after it
-    unix_offset_ns_ = block.t_unix_ns - block.t_host_ns;
+    // A damaged or forged pair whose difference does not fit is no clock: the offset stays.
+    int64_t offset = 0;
+    if (!__builtin_sub_overflow(block.t_unix_ns, block.t_host_ns, &offset))
+      unix_offset_ns_ = offset;
     return false;
   }
   return true;
