@@ -1,5 +1,6 @@
 // `mocap bench latency [--protocol slimevr]|capacity|replay|record` in tiny configurations: they
-// run, exit 0 and print one JSON object whose counts are consistent. No timing is asserted (shared machines).
+// run, exit 0 and print one JSON object whose counts are consistent. No timing is asserted (shared
+// machines).
 #include <gtest/gtest.h>
 
 #include <cstdio>

@@ -362,7 +362,8 @@ TEST(Mocapd, DemoPlaysABvhFileWithItsBones) {
   const std::string bvh = (dir / "walk160.bvh").string();
   std::string out;
   ASSERT_EQ(
-      run({kBin + "mocap", "perform", "--motion", "walk", "--body-height", "1.60", "--bvh", bvh}, &out),
+      run({kBin + "mocap", "perform", "--motion", "walk", "--body-height", "1.60", "--bvh", bvh},
+          &out),
       0)
       << out;
   const std::string sock = (dir / "ctl.sock").string();

@@ -25,11 +25,10 @@ class CheckingSink : public SampleSink {
   int64_t last_t_ = INT64_MIN;
 };
 
-/// records = true: input is [len][len bytes]... (one HID report per record).
-inline int fuzz_decoder(const char* protocol, const uint8_t* data, std::size_t size, bool records) {
-  DeviceSpec spec;
-  spec.name = "fuzz";
-  spec.protocol = protocol;
+/// Feeds the input to `spec`'s decoder. records = true: input is [len][len bytes]... (one HID
+/// report or datagram per record); samples step_ns apart in host time.
+inline int fuzz_decoder(const DeviceSpec& spec, const uint8_t* data, std::size_t size, bool records,
+                        int64_t step_ns = 4'000'000) {
   auto dec = make_decoder(spec);
   CheckingSink sink;
   std::size_t off = 0;
@@ -45,9 +44,16 @@ inline int fuzz_decoder(const char* protocol, const uint8_t* data, std::size_t s
     }
     dec->feed(std::span(data + off, n), t_ns, sink);
     off += n;
-    t_ns += 4'000'000;
+    t_ns += step_ns;
   }
   return 0;
+}
+
+inline int fuzz_decoder(const char* protocol, const uint8_t* data, std::size_t size, bool records) {
+  DeviceSpec spec;
+  spec.name = "fuzz";
+  spec.protocol = protocol;
+  return fuzz_decoder(spec, data, size, records);
 }
 
 }  // namespace mocap::fuzz

@@ -14,16 +14,5 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   spec.protocol = "slimevr";
   spec.options["trackers"] =
       "02:5E:00:00:00:01/0=0;02:5E:00:00:00:01/1=1@-y,x,z;00:00:00:00:00:00/0=2";
-  auto dec = mocap::make_decoder(spec);
-  mocap::fuzz::CheckingSink sink;
-  std::size_t off = 0;
-  int64_t t_ns = 1'000'000'000;
-  while (off < size) {
-    std::size_t len = data[off++];
-    if (len > size - off) len = size - off;
-    dec->feed(std::span(data + off, len), t_ns, sink);
-    off += len;
-    t_ns += 4'000'000;
-  }
-  return 0;
+  return mocap::fuzz::fuzz_decoder(spec, data, size, true);
 }
