@@ -115,9 +115,21 @@ class BodyTracker {
   /// acceleration of the joint-centre signal.
   std::vector<Eigen::Vector3d> prev_w_rad_s_;
   std::vector<int64_t> prev_w_t_ns_;
-  /// Per fitted segment: the slow part of its own and of its reference's signal (high-pass).
-  std::array<Eigen::Vector3d, kSegmentCount> slow_own_{}, slow_ref_{};
-  std::array<int64_t, kSegmentCount> slow_own_t_ns_{}, slow_ref_t_ns_{};
+  /// One signal's band-pass state (see feed_heading_from_motion).
+  struct BandPass {
+    Eigen::Vector3d slow = Eigen::Vector3d::Zero(), fast = Eigen::Vector3d::Zero();
+    int64_t t_ns = 0;  ///< 0: no sample yet
+  };
+  /// Per fitted segment: its own signal's and its reference's band-pass.
+  std::array<BandPass, kSegmentCount> own_band_{}, ref_band_{};
+  /// Per fitted segment: paired by joint acceleration (else by rate); its joint in the
+  /// reference's segment frame from the reference's site, and in its own frame from its own
+  /// site along the site normal (the part whose direction in the sensor frame does not depend
+  /// on the alignment sought), metres.
+  std::array<bool, kSegmentCount> acc_reference_{};
+  std::array<Eigen::Vector3d, kSegmentCount> joint_in_reference_m_{}, own_joint_m_{};
+  /// Per fitted segment: its first alignment was applied (later ones are rate-limited).
+  std::array<bool, kSegmentCount> heading_found_{};
   void feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q);
   void start_heading_from_motion(const CalibrationResult& r);
   void apply_heading_from_motion(int64_t t_ns);
