@@ -212,6 +212,24 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
         p = kSegmentParent[p];
       reference[s] = p;
     }
+  // Segments aligned from their own horizontal site normal are refined against the same
+  // evidence, within a band (a strap tilted off the normal turns that alignment). Not the upper
+  // arms: the shoulder girdle moves on the torso, which the model holds rigid, so the shoulder's
+  // acceleration from the torso's sensor is off.
+  refine_.fill(false);
+  turned_rad_.fill(0);
+  if (opt_.heading_from_motion.refine_max_deg > 0 &&
+      opt_.calibrator.heading == HeadingSource::mount_normals)
+    for (int s = 0; s < kSegmentCount; ++s) {
+      if (!known(s) || !own[s] || !r.heading_from_own_normal[s]) continue;
+      if (s == index(Segment::upper_arm_l) || s == index(Segment::upper_arm_r)) continue;
+      int p = kSegmentParent[s];
+      while (p >= 0 && !known(p))
+        p = kSegmentParent[p];
+      if (p < 0) continue;
+      reference[s] = p;
+      refine_[s] = true;
+    }
   heading_.reset(reference);
   // Joint accelerations pair a segment with its parent or, through the neck (never tracked,
   // short and stiff: held in its calibration pose), the head with the torso; further up (a
@@ -230,15 +248,18 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
       joint_m =
           model.joint_offset_m(p) + q_body_segment_in_pose(r.calibration.pose, ref).conjugate() *
                                         (q_body_segment_in_pose(r.calibration.pose, p) * joint_m);
+    // The own lever arm: whole where the mounting is known from the N-pose (a refined
+    // segment), else only its part along the site normal.
+    const Eigen::Vector3d site_m =
+        standard_site_position_m(static_cast<Segment>(s), model.dimensions());
     const Eigen::Vector3d n = standard_site_normal_body(static_cast<Segment>(s));
-    own_joint_m_[s] =
-        -n.dot(standard_site_position_m(static_cast<Segment>(s), model.dimensions())) * n;
+    own_joint_m_[s] = refine_[s] ? Eigen::Vector3d(-site_m) : Eigen::Vector3d(-n.dot(site_m) * n);
     joint_in_reference_m_[s] =
         joint_m - standard_site_position_m(static_cast<Segment>(ref), model.dimensions());
   }
   own_band_.fill({});
   ref_band_.fill({});
-  heading_found_.fill(false);
+  heading_found_ = refine_;  // a refined segment starts aligned
 }
 
 void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
@@ -248,15 +269,29 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   const double max_turn_rad =
       opt_.heading_from_motion.max_drift_deg_s * kRadPerDeg * static_cast<double>(kEveryNs) * 1e-9;
   heading_applied_t_ns_ = t_ns;
+  const double dead_band_rad = opt_.heading_from_motion.refine_dead_band_deg * kRadPerDeg;
+  const double refine_max_rad = opt_.heading_from_motion.refine_max_deg * kRadPerDeg;
   Calibration c = skeleton_.calibration();
   bool changed = false;
   for (int s = 0; s < kSegmentCount; ++s) {
     double yaw = 0;
     if (!heading_.estimate(s, yaw)) continue;
     if (std::abs(yaw) < kMinTurnRad) continue;
+    // A refined segment moves only when the evidence is off by more than the fit's own bias
+    // (model mismatch: joint centres, carrying angle), and stays within its band.
+    if (refine_[s]) {
+      if (std::abs(yaw) <= dead_band_rad) continue;
+      yaw -= std::copysign(dead_band_rad, yaw);
+    }
     // The first estimate aligns; afterwards the alignment only follows the slow drift of the
     // 6D heading, so a stretch of misleading motion cannot turn it over.
     if (heading_found_[s]) yaw = std::clamp(yaw, -max_turn_rad, max_turn_rad);
+    if (refine_[s]) {
+      const double total_rad = std::clamp(turned_rad_[s] + yaw, -refine_max_rad, refine_max_rad);
+      yaw = total_rad - turned_rad_[s];
+      turned_rad_[s] = total_rad;
+      if (std::abs(yaw) < 1e-9) continue;
+    }
     heading_found_[s] = true;
     // The sensor's frame turns by yaw; its mounting keeps the segment's calibration pose:
     // q_ss' = q_ss T^-1 Y^-1 T with T the segment's orientation at calibration.

@@ -130,6 +130,10 @@ class BodyTracker {
   std::array<Eigen::Vector3d, kSegmentCount> joint_in_reference_m_{}, own_joint_m_{};
   /// Per fitted segment: its first alignment was applied (later ones are rate-limited).
   std::array<bool, kSegmentCount> heading_found_{};
+  /// Per segment: aligned from its own site normal and refined from motion within a band, and
+  /// how far it has been turned so far, rad.
+  std::array<bool, kSegmentCount> refine_{};
+  std::array<double, kSegmentCount> turned_rad_{};
   void feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q);
   void start_heading_from_motion(const CalibrationResult& r);
   void apply_heading_from_motion(int64_t t_ns);

@@ -36,6 +36,12 @@ struct HeadingFromMotionOptions {
   /// constant and a 6D heading drifts far slower, so a stretch of misleading motion (a foot
   /// on a bar, a sword swing) cannot turn a found alignment over.
   double max_drift_deg_s = 2.0;
+  /// Sensors aligned from a horizontal site normal in the N-pose are refined by the same fit:
+  /// only when it disagrees by more than refine_dead_band_deg (the fit's own bias from the body
+  /// model's joint centres) and by at most refine_max_deg in all (a strap tilted off its
+  /// normal). 0 disables.
+  double refine_max_deg = 10.0;
+  double refine_dead_band_deg = 4.0;
 };
 
 class HeadingFromMotion {
