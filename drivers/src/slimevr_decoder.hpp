@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
 #include <span>
 #include <string>
 #include <vector>
@@ -33,6 +34,14 @@ struct SlimeMapping {
 /// invalid_argument.
 std::vector<SlimeMapping> slime_mappings(const DeviceSpec& spec);
 
+/// Sets field to `name` (from a SlimeVR id table), or to "WHAT N" for an id it does not know.
+template <std::size_t N>
+void set_named(char (&field)[N], const char* name, const char* what, uint32_t id) {
+  char buf[32];
+  if (name == nullptr) std::snprintf(buf, sizeof buf, "%s %u", what, id);
+  SensorTelemetry::set(field, name ? name : buf);
+}
+
 /// A board that sent a handshake (for status and `mocap devices`).
 struct SlimeBoardInfo {
   uint32_t ip = 0;
@@ -40,7 +49,6 @@ struct SlimeBoardInfo {
   slimevr::Mac mac{};
   uint32_t board = 0, imu = 0, mcu = 0, protocol_version = 0;
   std::string firmware;
-  float battery_level = -1;
 };
 
 class SlimeVrDecoder final : public ProtocolDecoder {
@@ -90,7 +98,6 @@ class SlimeVrDecoder final : public ProtocolDecoder {
     uint64_t last_number = 0;
     int64_t last_heard_ns = 0, last_heartbeat_ns = 0, last_ping_ns = 0;
     uint64_t heartbeat_number = 0;
-    float battery_level = -1;
     std::array<uint8_t, 256> hello_record{};
     std::size_t hello_len = 0;
   };
@@ -102,12 +109,18 @@ class SlimeVrDecoder final : public ProtocolDecoder {
     int64_t last_emit_ns = 0;
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
     Eigen::Vector3d lin_acc_m_s2 = Eigen::Vector3d::Zero();
+    SensorTelemetry telemetry;  ///< what its board said of itself and of this sensor
+    bool telemetry_changed = false;
   };
 
   int board_for(uint32_t ip, uint16_t port, int64_t t_ns);
   void handle(int b, const slimevr::Packet& p, int64_t t_ns, SampleSink& sink);
   void queue(const Board& b, std::span<const uint8_t> bytes);
   void emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t flags = 0);
+  /// Applies f to the telemetry of the rig sensors on board bi (all of them, or only those with
+  /// tracker sensor id `only` when it is 0..254), noting which changed.
+  template <class F>
+  void update_telemetry(int bi, int only, F&& f);
 
   DecoderStats stats_;
   std::array<Board, kMaxBoards> boards_{};
