@@ -17,6 +17,9 @@ namespace {
 constexpr int64_t kHeartbeatNs = 500'000'000;
 constexpr int64_t kPingNs = 1'000'000'000;
 constexpr int64_t kHoldNs = 100'000'000;  // a resting tracker's orientation repeated this often
+// ... while its board was heard this recently (it echoes the 0.5 s heartbeats): a board that
+// went silent is not kept alive by repeats, so it shows stale, then disconnected at timeout_ns.
+constexpr int64_t kAliveNs = 1'000'000'000;
 constexpr double kGravity_m_s2 = 9.80665;
 
 int parse_int(std::string_view s, int lo, int hi) {
@@ -334,7 +337,8 @@ void SlimeVrDecoder::tick(int64_t t_ns, SampleSink& sink) {
     }
     if (!b.hello) continue;
     for (Sensor& s : sensors_)
-      if (s.board == static_cast<int>(i) && s.connected && t_ns - s.last_emit_ns >= kHoldNs)
+      if (s.board == static_cast<int>(i) && s.connected && t_ns - s.last_emit_ns >= kHoldNs &&
+          t_ns - b.last_heard_ns <= kAliveNs)
         emit(s, t_ns, sink, kFlagInterpolated);  // at rest: the same orientation, still alive
     if (t_ns - b.last_heartbeat_ns >= kHeartbeatNs) {
       b.last_heartbeat_ns = t_ns;

@@ -61,7 +61,8 @@ class SlimeVrDecoder final : public ProtocolDecoder {
   /// Keep-alive: heartbeats every 0.5 s and pings every 1 s to each known board; a board
   /// silent for timeout_ns is forgotten and its sensors reported disconnected. A resting
   /// tracker sends no rotations (the firmware sends only changes) while it still answers: its
-  /// orientation is repeated every 100 ms (kFlagInterpolated) so it is not taken as stale.
+  /// orientation is repeated every 100 ms (kFlagInterpolated) so it is not taken as stale, as
+  /// long as its board was heard within the last second.
   void tick(int64_t t_host_ns, SampleSink& sink);
 
   struct Reply {
