@@ -43,9 +43,10 @@ class SlimeVrHidDecoder final : public ProtocolDecoder {
         for (Sensor& s : sensors_)
           if (s.map.mac == mac) {
             s.id = p.id;
-            update(s, [&](SensorTelemetry& t) {
-              SensorTelemetry::set(t.address, slimevr::mac_string(mac));
-            });
+            if (s.telemetry.address[0] == 0)  // once (register packets come in every report)
+              update(s, [&](SensorTelemetry& t) {
+                SensorTelemetry::set(t.address, slimevr::mac_string(mac));
+              });
           }
         continue;
       }
