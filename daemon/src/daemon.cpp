@@ -5,6 +5,7 @@
 
 #include <poll.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -244,8 +245,33 @@ std::string Daemon::handle(const ControlRequest& r) {
   return control_error_reply("unhandled command");
 }
 
+namespace {
+/// What the sensor reported about itself, as far as it did (docs/streaming.md, status).
+void add_telemetry(const SensorTelemetry& t, nlohmann::json& e) {
+  const auto num = [&](const char* key, float v, double per_unit) {
+    if (SensorTelemetry::known(v))
+      e[key] = std::round(static_cast<double>(v) * per_unit) / per_unit;
+  };
+  num("battery_pct", t.battery_fraction * 100.0f, 1);
+  num("battery_v", t.battery_v, 100);
+  num("battery_runtime_s", t.battery_runtime_s, 1);
+  num("rssi_dbm", t.rssi_dbm, 1);
+  num("temperature_c", t.temperature_c, 10);
+  num("packet_loss_pct", t.packet_loss * 100.0f, 10);
+  const auto text = [&](const char* key, const auto& field) {
+    if (field[0] != 0) e[key] = std::string(field, strnlen(field, sizeof field));
+  };
+  text("board", t.board);
+  text("imu", t.imu);
+  text("mcu", t.mcu);
+  text("firmware", t.firmware);
+  text("address", t.address);
+}
+}  // namespace
+
 std::string Daemon::status_json() const {
-  static constexpr const char* kStates[] = {"absent", "connecting", "streaming", "stale", "error"};
+  static constexpr const char* kStates[] = {"absent", "connecting", "streaming",
+                                            "stale",  "error",      "disconnected"};
   const PipelineStatus st = pipeline_->status();
   nlohmann::json j;
   j["ok"] = true;
@@ -293,14 +319,18 @@ std::string Daemon::status_json() const {
     nlohmann::json e;
     e["name"] = std::string(s.name, strnlen(s.name, sizeof s.name));
     e["segment"] = s.segment >= 0 ? std::string(kSegmentNames[s.segment]) : std::string();
-    e["state"] = kStates[std::min<int>(s.state, 4)];
+    e["state"] = s.state < std::size(kStates) ? kStates[s.state] : "error";
     // The status fields are floats: rounded as doubles, so 2.8 prints as 2.8.
     e["rate_hz"] = round_to(s.rate_hz, 10);
     e["age_ms"] = round_to(s.last_age_ms, 10);
     e["drops"] = s.drops;
     e["errors"] = s.errors;
-    if (i < devices_.size()) {  // device i carries sensor i (one sensor per configured device)
-      const DeviceStats ds = devices_[i]->stats();
+    // Its device: its own, or the one its port's SlimeVR trackers share (device_leader).
+    const size_t leader = i < cfg_.sensors.size() ? device_leader(cfg_, i) : i;
+    const auto dev = std::find_if(devices_.begin(), devices_.end(),
+                                  [&](const auto& d) { return d->spec().device_index == leader; });
+    if (dev != devices_.end()) {
+      const DeviceStats ds = (*dev)->stats();
       e["clock_resets"] = ds.decoder.clock_resets;  // device clock jumps/restarts detected
       e["reconnects"] = ds.reconnects;
       // Readings beyond the sensor's range (field dropped) / at full scale (docs/devices.md).
@@ -313,6 +343,7 @@ std::string Daemon::status_json() const {
     e["calibrated"] = (s.flags & kSegCalibrated) != 0;
     e["gyro_bias_dps"] = round_to(s.gyro_bias_dps, 1000);
     e["heading_sigma_deg"] = round_to(s.heading_sigma_deg, 10);
+    add_telemetry(st.telemetry[i], e);
     sensors.push_back(e);
   }
   j["sensors"] = sensors;

@@ -80,6 +80,33 @@ void print_status_table(const nlohmann::json& j) {
                                                      : "ok",
                 s.value("gyro_bias_dps", 0.0), s.value("heading_sigma_deg", 0.0));
   }
+  // What trackers report about themselves (SlimeVR: battery, signal, temperature, identity),
+  // one line per sensor that reported anything.
+  for (const auto& s : j.value("sensors", nlohmann::json::array())) {
+    std::string line;
+    const auto part = [&](const std::string& p) { line += (line.empty() ? "" : ", ") + p; };
+    const auto num = [&](const char* key, const char* fmt) {
+      if (!s.contains(key) || !s[key].is_number()) return;
+      char buf[48];
+      std::snprintf(buf, sizeof buf, fmt, s[key].get<double>());
+      part(buf);
+    };
+    std::string who = s.value("board", std::string());
+    for (const char* k : {"imu", "mcu"})
+      if (s.contains(k)) who += (who.empty() ? "" : " ") + s[k].get<std::string>();
+    if (s.contains("firmware"))
+      who += (who.empty() ? "" : " ") + ("firmware " + s["firmware"].get<std::string>());
+    if (s.contains("address")) who += (who.empty() ? "" : " ") + s["address"].get<std::string>();
+    if (!who.empty()) part(who);
+    num("battery_pct", "battery %.0f %%");
+    num("battery_v", "%.2f V");
+    num("battery_runtime_s", "%.0f s left");
+    num("rssi_dbm", "signal %.0f dBm");
+    num("packet_loss_pct", "%.1f %% packets lost");
+    num("temperature_c", "%.1f C");
+    if (!line.empty())
+      std::printf("%s: %s\n", s.value("name", std::string()).c_str(), line.c_str());
+  }
 }
 
 }  // namespace

@@ -132,8 +132,20 @@ void Pipeline::set_device_counters(int sensor, uint32_t drops, uint32_t errors) 
 }
 
 PipelineStatus Pipeline::status() const {
-  std::lock_guard lock(status_mu_);
-  return status_;
+  PipelineStatus st;
+  {
+    std::lock_guard lock(status_mu_);
+    st = status_;
+  }
+  std::lock_guard lock(telemetry_mu_);
+  st.telemetry = telemetry_;
+  return st;
+}
+
+void Pipeline::on_telemetry(uint16_t sensor_id, const SensorTelemetry& telemetry) {
+  if (sensor_id >= telemetry_.size()) return;
+  std::lock_guard lock(telemetry_mu_);
+  telemetry_[sensor_id] = telemetry;
 }
 
 uint64_t Pipeline::ring_drops() const {

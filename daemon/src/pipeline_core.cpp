@@ -107,7 +107,7 @@ void PipelineCore::set_external_counters(int sensor, uint32_t drops, uint32_t er
 
 void PipelineCore::set_connected(int sensor, bool connected) {
   if (sensor < 0 || sensor >= static_cast<int>(health_.size())) return;
-  health_[sensor].connected = connected;
+  health_[sensor].link = connected ? 1 : 0;
 }
 
 void PipelineCore::publish_frame(int64_t t_now_ns) {
@@ -162,9 +162,9 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
     st.last_age_ms =
         has_data ? static_cast<float>(std::max<int64_t>(0, t_now_ns - h.last_t_ns) * 1e-6) : 0.f;
     if (!has_data)
-      st.state = h.connected ? kConnecting : kAbsent;
+      st.state = h.link == 1 ? kConnecting : kAbsent;
     else
-      st.state = h.live ? kStreaming : kStale;
+      st.state = h.live ? kStreaming : h.link == 0 ? kDisconnected : kStale;
     st.rate_hz = h.live ? h.rate_hz : 0.f;
     st.drops = h.drops + h.gaps;
     st.errors = h.errors;

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 
 namespace mocap::slimevr {
 namespace {
@@ -58,9 +59,15 @@ bool parse_body(uint32_t type, Cursor& c, Packet& p) {
     case kHeartbeat:
     case kTap:
     case kError:
-    case kSignalStrength:
-    case kTemperature:
       break;  // nothing the driver uses
+    case kSignalStrength:
+      p.sensor_id = c.u8();
+      p.rssi_dbm = static_cast<int8_t>(c.u8());
+      break;
+    case kTemperature:
+      p.sensor_id = c.u8();
+      p.temperature_c = c.f32();
+      break;
     case kRotation:
       for (float& q : p.quat_xyzw)
         q = c.f32();
@@ -167,6 +174,47 @@ bool known(uint32_t type) {
 }
 
 }  // namespace
+
+const char* board_name(uint32_t id) {
+  static constexpr const char* kNames[] = {"unknown board",
+                                           "SlimeVR Legacy",
+                                           "SlimeVR Dev",
+                                           "NodeMCU",
+                                           "custom board",
+                                           "WROOM32",
+                                           "Wemos D1 Mini",
+                                           "TTGO T-Base",
+                                           "ESP-01",
+                                           "SlimeVR",
+                                           "Lolin C3 Mini",
+                                           "Beetle ESP32-C3",
+                                           "ESP32-C3 DevKitM-1",
+                                           "owoTrack",
+                                           "Wrangler Joy-Cons",
+                                           "Sony mocopi",
+                                           "Wemos Wroom-02 D1 Mini",
+                                           "XIAO ESP32C3",
+                                           "Haritora"};
+  if (id < std::size(kNames)) return kNames[id];
+  return id == 250 ? "prototype" : nullptr;
+}
+
+const char* imu_name(uint32_t id) {
+  static constexpr const char* kNames[] = {"unknown IMU", "MPU-9250",  "MPU-6500",  "BNO080",
+                                           "BNO085",      "BNO055",    "MPU-6050",  "BNO086",
+                                           "BMI160",      "ICM-20948", "ICM-42688", "BMI270",
+                                           "LSM6DS3TR-C", "LSM6DSV",   "LSM6DSO",   "LSM6DSR"};
+  if (id < std::size(kNames)) return kNames[id];
+  return id == 250 ? "prototype" : nullptr;
+}
+
+const char* mcu_name(uint32_t id) {
+  static constexpr const char* kNames[] = {"unknown MCU",      "ESP8266",  "ESP32",
+                                           "owoTrack Android", "Wrangler", "owoTrack iOS",
+                                           "ESP32-C3",         "mocopi",   "Haritora"};
+  if (id < std::size(kNames)) return kNames[id];
+  return id == 250 ? "prototype" : nullptr;
+}
 
 bool parse_mac(std::string_view text, Mac& mac) {
   if (text.size() != 17) return false;

@@ -17,6 +17,9 @@ namespace {
 constexpr int64_t kHeartbeatNs = 500'000'000;
 constexpr int64_t kPingNs = 1'000'000'000;
 constexpr int64_t kHoldNs = 100'000'000;  // a resting tracker's orientation repeated this often
+// ... while its board was heard this recently (it echoes the 0.5 s heartbeats): a board that
+// went silent is not kept alive by repeats, so it shows stale, then disconnected at timeout_ns.
+constexpr int64_t kAliveNs = 1'000'000'000;
 constexpr double kGravity_m_s2 = 9.80665;
 
 int parse_int(std::string_view s, int lo, int hi) {
@@ -98,7 +101,7 @@ std::vector<SlimeBoardInfo> SlimeVrDecoder::boards() const {
   for (const Board& b : boards_)
     if (b.used && b.hello)
       out.push_back({b.ip, b.port, b.mac, b.board, b.imu, b.mcu, b.protocol_version,
-                     std::string(b.firmware.data(), b.firmware_len), b.battery_level});
+                     std::string(b.firmware.data(), b.firmware_len)});
   return out;
 }
 
@@ -173,8 +176,23 @@ void SlimeVrDecoder::feed(std::span<const uint8_t> record, int64_t t_host_ns, Sa
     b.hello_len = std::min(record.size(), b.hello_record.size());
     std::copy_n(record.begin(), b.hello_len, b.hello_record.begin());
   }
-  for (Sensor& s : sensors_)
+  for (Sensor& s : sensors_) {
     if (s.board == bi && s.new_quat) emit(s, t_host_ns, sink);
+    if (s.telemetry_changed) {
+      s.telemetry_changed = false;
+      sink.on_telemetry(s.map.sensor_id, s.telemetry);
+    }
+  }
+}
+
+template <class F>
+void SlimeVrDecoder::update_telemetry(int bi, int only, F&& f) {
+  for (Sensor& s : sensors_) {
+    if (s.board != bi || (only >= 0 && only < 255 && s.map.tracker_sensor != only)) continue;
+    const SensorTelemetry before = s.telemetry;
+    f(s.telemetry);
+    s.telemetry_changed = s.telemetry_changed || !(before == s.telemetry);
+  }
 }
 
 void SlimeVrDecoder::handle(int bi, const sv::Packet& p, int64_t t_ns, SampleSink& sink) {
@@ -198,14 +216,34 @@ void SlimeVrDecoder::handle(int bi, const sv::Packet& p, int64_t t_ns, SampleSin
         if (s.board >= 0 && s.board != bi) boards_[static_cast<std::size_t>(s.board)].used = false;
         s.board = bi;
       }
+      update_telemetry(bi, -1, [&](SensorTelemetry& t) {
+        set_named(t.board, sv::board_name(p.board), "board", p.board);
+        if (t.imu[0] == 0) set_named(t.imu, sv::imu_name(p.handshake_imu), "IMU", p.handshake_imu);
+        set_named(t.mcu, sv::mcu_name(p.mcu), "MCU", p.mcu);
+        SensorTelemetry::set(t.firmware, p.firmware_text());
+        SensorTelemetry::set(t.address, sv::mac_string(p.mac));
+      });
       return;
     }
     case sv::kSensorInfo: {
       std::array<uint8_t, 6> ack{};
       sv::write_sensor_info_ack(ack, p.sensor_id, p.sensor_state);
       queue(b, ack);
+      if (p.imu_type != 0)  // this sensor's own IMU (the handshake names the board's first)
+        update_telemetry(bi, p.sensor_id, [&](SensorTelemetry& t) {
+          set_named(t.imu, sv::imu_name(p.imu_type), "IMU", p.imu_type);
+        });
       return;
     }
+    case sv::kSignalStrength:
+      update_telemetry(bi, p.sensor_id,
+                       [&](SensorTelemetry& t) { t.rssi_dbm = static_cast<float>(p.rssi_dbm); });
+      return;
+    case sv::kTemperature:
+      if (std::isfinite(p.temperature_c))
+        update_telemetry(bi, p.sensor_id,
+                         [&](SensorTelemetry& t) { t.temperature_c = p.temperature_c; });
+      return;
     case sv::kFeatureFlags: {
       std::array<uint8_t, 13> flags{};
       sv::write_feature_flags(flags, 0, 0x01);  // bit 0: we take bundles (100, 101)
@@ -213,7 +251,11 @@ void SlimeVrDecoder::handle(int bi, const sv::Packet& p, int64_t t_ns, SampleSin
       return;
     }
     case sv::kBattery:
-      b.battery_level = p.battery_level;
+      update_telemetry(bi, -1, [&](SensorTelemetry& t) {
+        if (std::isfinite(p.battery_level) && p.battery_level >= 0)
+          t.battery_fraction = std::min(p.battery_level, 1.0f);
+        if (std::isfinite(p.battery_v) && p.battery_v > 0) t.battery_v = p.battery_v;
+      });
       return;
     case sv::kUserAction: {
       if (p.action != sv::kResetFull && p.action != sv::kResetYaw && p.action != sv::kResetMounting)
@@ -295,7 +337,8 @@ void SlimeVrDecoder::tick(int64_t t_ns, SampleSink& sink) {
     }
     if (!b.hello) continue;
     for (Sensor& s : sensors_)
-      if (s.board == static_cast<int>(i) && s.connected && t_ns - s.last_emit_ns >= kHoldNs)
+      if (s.board == static_cast<int>(i) && s.connected && t_ns - s.last_emit_ns >= kHoldNs &&
+          t_ns - b.last_heard_ns <= kAliveNs)
         emit(s, t_ns, sink, kFlagInterpolated);  // at rest: the same orientation, still alive
     if (t_ns - b.last_heartbeat_ns >= kHeartbeatNs) {
       b.last_heartbeat_ns = t_ns;

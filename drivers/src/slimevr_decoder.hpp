@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
 #include <span>
 #include <string>
 #include <vector>
@@ -33,6 +34,14 @@ struct SlimeMapping {
 /// invalid_argument.
 std::vector<SlimeMapping> slime_mappings(const DeviceSpec& spec);
 
+/// Sets field to `name` (from a SlimeVR id table), or to "WHAT N" for an id it does not know.
+template <std::size_t N>
+void set_named(char (&field)[N], const char* name, const char* what, uint32_t id) {
+  char buf[32];
+  if (name == nullptr) std::snprintf(buf, sizeof buf, "%s %u", what, id);
+  SensorTelemetry::set(field, name ? name : buf);
+}
+
 /// A board that sent a handshake (for status and `mocap devices`).
 struct SlimeBoardInfo {
   uint32_t ip = 0;
@@ -40,7 +49,6 @@ struct SlimeBoardInfo {
   slimevr::Mac mac{};
   uint32_t board = 0, imu = 0, mcu = 0, protocol_version = 0;
   std::string firmware;
-  float battery_level = -1;
 };
 
 class SlimeVrDecoder final : public ProtocolDecoder {
@@ -53,7 +61,8 @@ class SlimeVrDecoder final : public ProtocolDecoder {
   /// Keep-alive: heartbeats every 0.5 s and pings every 1 s to each known board; a board
   /// silent for timeout_ns is forgotten and its sensors reported disconnected. A resting
   /// tracker sends no rotations (the firmware sends only changes) while it still answers: its
-  /// orientation is repeated every 100 ms (kFlagInterpolated) so it is not taken as stale.
+  /// orientation is repeated every 100 ms (kFlagInterpolated) so it is not taken as stale, as
+  /// long as its board was heard within the last second.
   void tick(int64_t t_host_ns, SampleSink& sink);
 
   struct Reply {
@@ -90,7 +99,6 @@ class SlimeVrDecoder final : public ProtocolDecoder {
     uint64_t last_number = 0;
     int64_t last_heard_ns = 0, last_heartbeat_ns = 0, last_ping_ns = 0;
     uint64_t heartbeat_number = 0;
-    float battery_level = -1;
     std::array<uint8_t, 256> hello_record{};
     std::size_t hello_len = 0;
   };
@@ -102,12 +110,18 @@ class SlimeVrDecoder final : public ProtocolDecoder {
     int64_t last_emit_ns = 0;
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
     Eigen::Vector3d lin_acc_m_s2 = Eigen::Vector3d::Zero();
+    SensorTelemetry telemetry;  ///< what its board said of itself and of this sensor
+    bool telemetry_changed = false;
   };
 
   int board_for(uint32_t ip, uint16_t port, int64_t t_ns);
   void handle(int b, const slimevr::Packet& p, int64_t t_ns, SampleSink& sink);
   void queue(const Board& b, std::span<const uint8_t> bytes);
   void emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t flags = 0);
+  /// Applies f to the telemetry of the rig sensors on board bi (all of them, or only those with
+  /// tracker sensor id `only` when it is 0..254), noting which changed.
+  template <class F>
+  void update_telemetry(int bi, int only, F&& f);
 
   DecoderStats stats_;
   std::array<Board, kMaxBoards> boards_{};

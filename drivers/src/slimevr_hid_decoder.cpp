@@ -3,6 +3,7 @@
 // over UDP) per mapped address, trackers reported appearing (first data) and leaving (3 s
 // without data while the receiver keeps reporting).
 #include <cmath>
+#include <cstdio>
 
 #include "decoders.hpp"
 #include "mocap/drivers/slimevr_hid.hpp"
@@ -40,13 +41,26 @@ class SlimeVrHidDecoder final : public ProtocolDecoder {
         for (std::size_t j = 0; j < 6; ++j)
           mac[j] = p.address[5 - j];
         for (Sensor& s : sensors_)
-          if (s.map.mac == mac) s.id = p.id;
+          if (s.map.mac == mac) {
+            s.id = p.id;
+            if (s.telemetry.address[0] == 0)  // once (register packets come in every report)
+              update(s, [&](SensorTelemetry& t) {
+                SensorTelemetry::set(t.address, slimevr::mac_string(mac));
+              });
+          }
         continue;
       }
-      if (!p.has_quat) continue;
-      for (Sensor& s : sensors_)
-        if (s.id == p.id) emit(s, p, t_ns, sink);
+      for (Sensor& s : sensors_) {
+        if (s.id != p.id) continue;
+        update(s, [&](SensorTelemetry& t) { take_telemetry(p, t); });
+        if (p.has_quat) emit(s, p, t_ns, sink);
+      }
     }
+    for (Sensor& s : sensors_)
+      if (s.telemetry_changed) {
+        s.telemetry_changed = false;
+        sink.on_telemetry(s.map.sensor_id, s.telemetry);
+      }
     for (Sensor& s : sensors_) {
       if (!s.connected || t_ns - s.last_ns <= kLeaveNs) continue;
       s.connected = false;
@@ -63,7 +77,41 @@ class SlimeVrHidDecoder final : public ProtocolDecoder {
     int id = -1;  ///< receiver id while registered
     bool connected = false;
     int64_t last_ns = 0;
+    SensorTelemetry telemetry;
+    bool telemetry_changed = false;
   };
+
+  template <class F>
+  static void update(Sensor& s, F&& f) {
+    const SensorTelemetry before = s.telemetry;
+    f(s.telemetry);
+    s.telemetry_changed = s.telemetry_changed || !(before == s.telemetry);
+  }
+
+  /// The telemetry a packet carries (what it does not carry stays as it was).
+  static void take_telemetry(const sh::Packet& p, SensorTelemetry& t) {
+    const auto take = [](float v, float& into) {
+      if (SensorTelemetry::known(v)) into = v;
+    };
+    take(p.battery_fraction, t.battery_fraction);
+    take(p.battery_v, t.battery_v);
+    take(p.temperature_c, t.temperature_c);
+    take(p.rssi_dbm, t.rssi_dbm);
+    if (p.type == sh::kRuntime && p.runtime_us >= 0)
+      t.battery_runtime_s = static_cast<float>(static_cast<double>(p.runtime_us) * 1e-6);
+    if (p.has_link_counts && p.packets_received + p.packets_lost > 0)
+      t.packet_loss = static_cast<float>(p.packets_lost) /
+                      static_cast<float>(p.packets_received + p.packets_lost);
+    if (p.type == sh::kInfo) {
+      set_named(t.board, slimevr::board_name(p.board), "board", p.board);
+      set_named(t.imu, slimevr::imu_name(p.imu), "IMU", p.imu);
+      set_named(t.mcu, slimevr::mcu_name(p.mcu), "MCU", p.mcu);
+      char buf[48];
+      std::snprintf(buf, sizeof buf, "%u.%u.%u (%04u-%02u-%02u)", p.fw_major, p.fw_minor,
+                    p.fw_patch, p.fw_year, p.fw_month, p.fw_day);
+      SensorTelemetry::set(t.firmware, buf);
+    }
+  }
 
   void emit(Sensor& s, const sh::Packet& p, int64_t t_ns, SampleSink& sink) {
     const Eigen::Quaterniond q(p.quat_xyzw[3], p.quat_xyzw[0], p.quat_xyzw[1], p.quat_xyzw[2]);

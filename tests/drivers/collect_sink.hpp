@@ -1,5 +1,6 @@
-// Helpers for the driver tests: a SampleSink that keeps every sample and connection event
-// (thread-safe), the log sink the tests' devices write to, and a free loopback port.
+// Helpers for the driver tests: a SampleSink that keeps every sample, connection event and
+// telemetry report (thread-safe), the log sink the tests' devices write to, and a free loopback
+// port.
 #pragma once
 
 #include <chrono>
@@ -38,6 +39,14 @@ class CollectSink : public SampleSink {
     std::lock_guard lk(mu_);
     events.push_back({c, std::string(why), monotonic_ns()});
   }
+  void on_telemetry(uint16_t sensor_id, const SensorTelemetry& t) override {
+    std::lock_guard lk(mu_);
+    telemetry.push_back({sensor_id, t});
+  }
+  std::vector<std::pair<uint16_t, SensorTelemetry>> telemetry_snapshot() const {
+    std::lock_guard lk(mu_);
+    return telemetry;
+  }
   std::vector<ImuSample> snapshot() const {
     std::lock_guard lk(mu_);
     return samples;
@@ -64,6 +73,7 @@ class CollectSink : public SampleSink {
   mutable std::mutex mu_;
   std::vector<ImuSample> samples;
   std::vector<ConnectionEvent> events;
+  std::vector<std::pair<uint16_t, SensorTelemetry>> telemetry;  ///< (sensor id, report)
   std::size_t raw_bytes = 0;
 };
 

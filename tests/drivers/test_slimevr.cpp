@@ -307,7 +307,7 @@ TEST(SlimeVrHid, ParsesPacketsWithOrWithoutAReportIdAndSkipsPadding) {
   const uint32_t zero = 512u | 1024u << 10 | 1024u << 21;  // exponential map (0, 0, 0)
   for (int j = 0; j < 4; ++j)
     r[21 + j] = static_cast<uint8_t>(zero >> (8 * j));
-  r[32] = 6;  // a type whose layout is not known: skipped
+  r[32] = 9;  // a type whose layout is not known: skipped
   std::array<slimevr_hid::Packet, 8> p;
   ASSERT_EQ(slimevr_hid::parse_report(r, p), 2u);
   EXPECT_EQ(p[0].id, 3);

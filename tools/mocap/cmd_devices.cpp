@@ -9,6 +9,7 @@
 #include "commands.hpp"
 #include "mocap/core/cli.hpp"
 #include "mocap/drivers/known_devices.hpp"
+#include "mocap/drivers/slimevr.hpp"
 #include "mocap/drivers/slimevr_listen.hpp"
 
 namespace mocap::cmd {
@@ -31,9 +32,13 @@ void list_slimevr(int port, double seconds) {
   if (hellos.empty())
     std::printf("# SlimeVR: no tracker said hello on udp %s in %.1f s\n", addr.c_str(), seconds);
   for (const auto& h : hellos) {
+    const auto named = [](const char* name) { return name ? name : "?"; };
     std::printf(
-        "# slimevr: tracker %s at %s (board %u, IMU %u, MCU %u, firmware \"%s\", protocol %u)\n",
-        h.mac.c_str(), h.ip.c_str(), h.board, h.imu, h.mcu, h.firmware.c_str(), h.protocol_version);
+        "# slimevr: tracker %s at %s (board %u %s, IMU %u %s, MCU %u %s, firmware \"%s\", "
+        "protocol %u)\n",
+        h.mac.c_str(), h.ip.c_str(), h.board, named(slimevr::board_name(h.board)), h.imu,
+        named(slimevr::imu_name(h.imu)), h.mcu, named(slimevr::mcu_name(h.mcu)), h.firmware.c_str(),
+        h.protocol_version);
     std::printf(
         "[[sensor]]\nname = \"slime_%s\"\ndriver = \"slimevr\"\nport = \"udp:%s\"\n"
         "segment = \"pelvis\"  # choose the body segment\n"

@@ -3,6 +3,7 @@
 // configuration commands the way the device does. Built on mocap/devsim/sim_device.hpp.
 #include <signal.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -23,7 +24,9 @@ constexpr const char* kSimulateUsage =
     "  --out writes a capture: the byte stream, or for HID protocols each report prefixed by\n"
     "  one length byte (the format the fuzz corpora and report-byte tests use).\n"
     "  slimevr: a tracker board speaking to the server at --udp HOST:PORT (handshake, then\n"
-    "  rotation + acceleration); --option mac=AA:BB:CC:DD:EE:FF, --option sensors=N (IMUs).\n";
+    "  rotation + acceleration); --option mac=AA:BB:CC:DD:EE:FF, --option sensors=N (IMUs);\n"
+    "  what it reports about itself once a second: --option battery_v=V, battery_pct=0..100,\n"
+    "  rssi=DBM, temperature=C.\n";
 
 bool parse_kv(const std::vector<std::string>& items, std::map<std::string, std::string>& out) {
   for (const auto& kv : items) {
@@ -100,17 +103,52 @@ int run_slimevr(const SimOptions& so, double duration, const sigset_t& stop_sign
   o.rate_hz = so.rate_hz;
   o.motion = so.motion;
   for (const auto& [k, v] : so.options) {
+    double x = 0;
+    const bool number = [&] {
+      std::size_t used = 0;
+      try {
+        x = std::stod(v, &used);
+      } catch (const std::exception&) {
+        return false;
+      }
+      return used == v.size();
+    }();
+    if (k != "mac" && !number) {
+      std::fprintf(stderr, "mocap simulate: --option %s=%s: not a number\n", k.c_str(), v.c_str());
+      return 2;
+    }
     if (k == "mac") {
       o.mac = v;
     } else if (k == "sensors") {
-      o.sensors = std::atoi(v.c_str());
+      if (x != std::floor(x) || x < 1 || x > 10) {
+        std::fprintf(stderr, "mocap simulate: --option sensors=%s: 1..10 IMUs\n", v.c_str());
+        return 2;
+      }
+      o.sensors = static_cast<int>(x);
+    } else if (k == "battery_v") {
+      o.battery_v = x;
+    } else if (k == "battery_pct") {
+      o.battery_pct = x;
+    } else if (k == "rssi") {
+      o.rssi_dbm = x;
+    } else if (k == "temperature") {
+      o.temperature_c = x;
     } else {
-      std::fprintf(stderr, "mocap simulate: slimevr has no option '%s' (mac, sensors)\n",
+      std::fprintf(stderr,
+                   "mocap simulate: slimevr has no option '%s' (mac, sensors, battery_v, "
+                   "battery_pct, rssi, temperature)\n",
                    k.c_str());
       return 2;
     }
   }
-  SimSlimeTracker t(o);
+  std::unique_ptr<SimSlimeTracker> made;
+  try {
+    made = std::make_unique<SimSlimeTracker>(o);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mocap simulate: slimevr: %s\n", e.what());
+    return 2;
+  }
+  SimSlimeTracker& t = *made;
   std::printf("udp: slimevr tracker %s (%d sensors) to %s\n", o.mac.c_str(), o.sensors,
               o.server.c_str());
   std::fflush(stdout);

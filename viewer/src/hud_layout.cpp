@@ -20,6 +20,8 @@ const char* state_name(uint8_t s) {
       return "OK";
     case 3:
       return "STALE";
+    case 5:
+      return "LOST";
     default:
       return "ERROR";
   }

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -43,9 +44,9 @@ void header(std::vector<uint8_t>& o, uint32_t type, uint64_t number) {
 
 void handshake(const slimevr::Mac& mac, std::vector<uint8_t>& out) {
   header(out, slimevr::kHandshake, 0);
-  u32(out, 4);   // board: BOARD_SLIMEVR
-  u32(out, 10);  // IMU: BMI270 class
-  u32(out, 2);   // MCU: ESP8266
+  u32(out, 9);   // board: BOARD_SLIMEVR
+  u32(out, 11);  // IMU: BMI270
+  u32(out, 1);   // MCU: ESP8266
   u32(out, 0), u32(out, 0), u32(out, 0);
   u32(out, 22);  // protocol (firmware build) version
   const char fw[] = "0.6.0-sim";
@@ -61,7 +62,7 @@ void sensor_info(uint64_t number, uint8_t sensor, std::vector<uint8_t>& out) {
   header(out, slimevr::kSensorInfo, number);
   u8(out, sensor);
   u8(out, 1);   // state: OK
-  u8(out, 10);  // IMU type
+  u8(out, 11);  // IMU type: BMI270
   for (int i = 0; i < 13; ++i)
     u8(out, 0);  // sensor config, calibration flags, position, data type, reserved (28 bytes)
 }
@@ -91,6 +92,24 @@ void user_action(uint64_t number, uint8_t action, std::vector<uint8_t>& out) {
   u8(out, action);
 }
 
+void battery(uint64_t number, double voltage_v, double level, std::vector<uint8_t>& out) {
+  header(out, slimevr::kBattery, number);
+  f32(out, voltage_v);
+  f32(out, level);
+}
+
+void signal_strength(uint64_t number, int8_t rssi_dbm, std::vector<uint8_t>& out) {
+  header(out, slimevr::kSignalStrength, number);
+  u8(out, 255);  // the board's, not one sensor's
+  u8(out, static_cast<uint8_t>(rssi_dbm));
+}
+
+void temperature(uint64_t number, uint8_t sensor, double celsius, std::vector<uint8_t>& out) {
+  header(out, slimevr::kTemperature, number);
+  u8(out, sensor);
+  f32(out, celsius);
+}
+
 }  // namespace slime_sim
 
 SimSlimeTracker::SimSlimeTracker(SimSlimeOptions opt) : opt_(std::move(opt)) {
@@ -100,6 +119,14 @@ SimSlimeTracker::SimSlimeTracker(SimSlimeOptions opt) : opt_(std::move(opt)) {
     throw std::invalid_argument("sensors: 1..10 IMUs on a board");
   if (!(opt_.rate_hz > 0 && opt_.rate_hz <= 1000))
     throw std::invalid_argument("rate: 0 < Hz <= 1000");
+  if (!std::isnan(opt_.battery_v) && !(opt_.battery_v > 0 && opt_.battery_v < 10))
+    throw std::invalid_argument("battery_v: volts, 0 < V < 10");
+  if (!std::isnan(opt_.battery_pct) && !(opt_.battery_pct >= 0 && opt_.battery_pct <= 100))
+    throw std::invalid_argument("battery_pct: 0..100");
+  if (!std::isnan(opt_.rssi_dbm) && !(opt_.rssi_dbm >= -128 && opt_.rssi_dbm <= 0))
+    throw std::invalid_argument("rssi: dBm, -128..0");
+  if (!std::isnan(opt_.temperature_c) && !(opt_.temperature_c > -60 && opt_.temperature_c < 150))
+    throw std::invalid_argument("temperature: degrees C, -60..150");
   motion_ = make_motion(opt_.motion);
   info_acked_.assign(static_cast<std::size_t>(opt_.sensors), false);
   last_sent_.assign(static_cast<std::size_t>(opt_.sensors), std::nullopt);
@@ -174,7 +201,8 @@ void SimSlimeTracker::run() {
   std::vector<uint8_t> out;
   out.reserve(512);
   const int64_t period_ns = static_cast<int64_t>(1e9 / opt_.rate_hz);
-  int64_t t_device_ns = 0, last_handshake_ns = INT64_MIN / 2, last_info_ns = INT64_MIN / 2;
+  int64_t t_device_ns = 0, last_handshake_ns = INT64_MIN / 2, last_info_ns = INT64_MIN / 2,
+          last_report_ns = INT64_MIN / 2;
   timespec next{};
   clock_gettime(CLOCK_MONOTONIC, &next);
   while (!stop_) {
@@ -199,6 +227,26 @@ void SimSlimeTracker::run() {
           if (info_acked_[k]) continue;
           out.clear();
           slime_sim::sensor_info(++number_, static_cast<uint8_t>(k), out);
+          send(out);
+        }
+      }
+      if (now - last_report_ns >= kHandshakeEveryNs) {  // battery, signal, temperature
+        last_report_ns = now;
+        if (!std::isnan(opt_.battery_v) || !std::isnan(opt_.battery_pct)) {
+          out.clear();
+          slime_sim::battery(++number_, std::isnan(opt_.battery_v) ? 0.0 : opt_.battery_v,
+                             std::isnan(opt_.battery_pct) ? 0.0 : opt_.battery_pct / 100, out);
+          send(out);
+        }
+        if (!std::isnan(opt_.rssi_dbm)) {
+          out.clear();
+          slime_sim::signal_strength(++number_, static_cast<int8_t>(std::lround(opt_.rssi_dbm)),
+                                     out);
+          send(out);
+        }
+        for (int k = 0; k < opt_.sensors && !std::isnan(opt_.temperature_c); ++k) {
+          out.clear();
+          slime_sim::temperature(++number_, static_cast<uint8_t>(k), opt_.temperature_c, out);
           send(out);
         }
       }

@@ -36,6 +36,9 @@ struct PipelineStatus {
   CalibrationProgress calibration;
   uint64_t samples = 0, rejected = 0, ring_drops = 0, frames = 0;
   bool calibrating = false;
+  /// What each sensor last reported about itself (battery, signal, temperature, identity;
+  /// SampleSink::on_telemetry), by sensor index; all unknown for devices that report nothing.
+  std::array<SensorTelemetry, kMaxSensors> telemetry{};
 };
 
 class Pipeline final : public SampleSink {
@@ -59,6 +62,8 @@ class Pipeline final : public SampleSink {
   /// A sensor's reset button: full = calibrate in the configured pose (as `mocapctl calibrate`),
   /// heading = `mocapctl reset-heading`.
   void on_reset_request(uint16_t device_index, ResetRequest what) override;
+  /// Kept (short lock) for status(); not part of the frames.
+  void on_telemetry(uint16_t sensor_id, const SensorTelemetry& telemetry) override;
 
   /// Maps device index -> sensor index for connection reports (default identity).
   void set_device_sensor(uint16_t device_index, int sensor);
@@ -123,6 +128,8 @@ class Pipeline final : public SampleSink {
 
   mutable std::mutex status_mu_;
   PipelineStatus status_;
+  mutable std::mutex telemetry_mu_;
+  std::array<SensorTelemetry, kMaxSensors> telemetry_{};  // by sensor index
   int64_t last_snapshot_ns_ = 0;
 
   class TapSink final : public FrameSink {

@@ -39,8 +39,17 @@ struct SensorInfo {
   int segment = -1;  ///< Segment index or -1
 };
 
-/// Sensor connection states (SensorStatus::state).
-enum SensorState : uint8_t { kAbsent = 0, kConnecting = 1, kStreaming = 2, kStale = 3, kError = 4 };
+/// Sensor connection states (SensorStatus::state). kDisconnected: it streamed, then its device
+/// reported the link gone (a SlimeVR tracker silent for 3 s, a tracker that left its receiver,
+/// an unplugged serial device) and nothing came since; kStale: silent, link not reported gone.
+enum SensorState : uint8_t {
+  kAbsent = 0,
+  kConnecting = 1,
+  kStreaming = 2,
+  kStale = 3,
+  kError = 4,
+  kDisconnected = 5,
+};
 
 class PipelineCore {
  public:
@@ -89,7 +98,7 @@ class PipelineCore {
     float rate_hz = 0;
     uint32_t drops = 0, errors = 0;  // external counters
     uint32_t gaps = 0;               // samples flagged kFlagGapBefore
-    bool connected = false;
+    int8_t link = -1;                // what its device reported: -1 nothing, 0 gone, 1 connected
     bool live = false;
   };
   void maybe_finish_calibration(int64_t t_now_ns);

@@ -15,6 +15,7 @@
 
 #include "mocap/core/imu_sample.hpp"
 #include "mocap/core/log.hpp"
+#include "mocap/drivers/sensor_telemetry.hpp"
 
 namespace mocap {
 
@@ -36,6 +37,9 @@ class SampleSink {
                              std::string_view /*reason*/) {}
   /// A sensor asked for a reset (a SlimeVR tracker's button: packet 21). Quick, non-blocking.
   virtual void on_reset_request(uint16_t /*device_index*/, ResetRequest /*what*/) {}
+  /// What a sensor reports about itself (battery, signal, temperature, identity), whole, each
+  /// time a value changes; sensor_id as on its samples. Quick, non-blocking (a short lock).
+  virtual void on_telemetry(uint16_t /*sensor_id*/, const SensorTelemetry& /*telemetry*/) {}
 };
 
 /// How to reach and decode one device. Parsed from the daemon config; also built by tests.

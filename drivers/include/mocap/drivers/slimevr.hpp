@@ -39,13 +39,20 @@ enum Type : uint32_t {
 /// Server -> tracker heartbeat type.
 constexpr uint32_t kServerHeartbeat = 1;
 
-/// Packet 21 actions (the tracker's button or gesture).
+/// Packet 21 actions (the tracker's button or gesture), numbered as SlimeVR-Server's
+/// UDPPacket21UserAction reads them.
 enum UserAction : uint8_t {
-  kResetFull = 0,
-  kResetYaw = 1,
-  kResetMounting = 2,
-  kPauseTracking = 3,
+  kResetFull = 2,
+  kResetYaw = 3,
+  kResetMounting = 4,
+  kPauseTracking = 5,
 };
+
+/// Names of the handshake's board, IMU and MCU numbers (SlimeVR-Server's BoardType, IMUType,
+/// MCUType; the HID receiver's device-info packet uses the same numbers); nullptr if unknown.
+const char* board_name(uint32_t id);
+const char* imu_name(uint32_t id);
+const char* mcu_name(uint32_t id);
 
 using Mac = std::array<uint8_t, 6>;
 
@@ -57,7 +64,7 @@ std::string mac_string(const Mac& mac);
 struct Packet {
   uint32_t type = 0;
   uint64_t number = 0;      ///< packet number (0 inside bundles: they share the outer one)
-  uint8_t sensor_id = 0;    ///< sensor on the board (types 4, 15, 17, 18, 23; 0 for type 1)
+  uint8_t sensor_id = 0;    ///< sensor on the board (types 4, 15, 17-20, 23; 0 for type 1)
   bool has_quat = false;    ///< quat_xyzw holds a rotation (types 1, 17, 23)
   bool has_accel = false;   ///< accel holds an acceleration (types 4, 23)
   float quat_xyzw[4] = {};  ///< as sent: x, y, z, w
@@ -68,6 +75,8 @@ struct Packet {
   float battery_v = 0, battery_level = 0;  ///< 12 (level 0..1; older firmware sends only it)
   uint8_t sensor_state = 0, imu_type = 0;  ///< 15
   float mag_accuracy = 0;                  ///< 18
+  int8_t rssi_dbm = 0;                     ///< 19: WiFi signal strength (sensor id 255: board)
+  float temperature_c = 0;                 ///< 20: the sensor's temperature
   uint8_t action = 0;                      ///< 21 (UserAction)
   uint8_t feature_flags = 0;               ///< 22: first flag byte
   // 3 handshake:

@@ -42,7 +42,7 @@ enum FrameFlag : uint32_t {
 struct SensorStatus {
   char name[24] = {};   ///< sensor name from the rig, NUL-terminated
   int8_t segment = -1;  ///< Segment index it drives, -1 if none
-  uint8_t state = 0;    ///< 0 absent, 1 connecting, 2 streaming, 3 stale, 4 error
+  uint8_t state = 0;    ///< 0 absent, 1 connecting, 2 streaming, 3 stale, 4 error, 5 disconnected
   uint16_t flags =
       0;              ///< SegmentFlag bits of its health (rig::SensorHealth::segment_flags) + stale
   float rate_hz = 0;  ///< measured sample rate

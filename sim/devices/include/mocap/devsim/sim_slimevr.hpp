@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -33,6 +34,12 @@ void acceleration(uint64_t number, uint8_t sensor, const Eigen::Vector3d& a,
                   std::vector<uint8_t>& out);
 void heartbeat(uint64_t number, std::vector<uint8_t>& out);
 void user_action(uint64_t number, uint8_t action, std::vector<uint8_t>& out);
+/// Packet 12: battery voltage (V) and level (0..1).
+void battery(uint64_t number, double voltage_v, double level, std::vector<uint8_t>& out);
+/// Packet 19: WiFi RSSI (dBm) of the board (sensor id 255, as the firmware sends it).
+void signal_strength(uint64_t number, int8_t rssi_dbm, std::vector<uint8_t>& out);
+/// Packet 20: a sensor's temperature (degrees C).
+void temperature(uint64_t number, uint8_t sensor, double celsius, std::vector<uint8_t>& out);
 }  // namespace slime_sim
 
 struct SimSlimeOptions {
@@ -44,6 +51,12 @@ struct SimSlimeOptions {
   /// The firmware's OPTIMIZE_UPDATES: a rotation is sent only when it changed (a resting
   /// tracker goes quiet but for its answers to the server).
   bool optimize_updates = false;
+  /// What the board reports about itself once a second while connected (packets 12, 19, 20);
+  /// NaN: not sent.
+  double battery_v = std::numeric_limits<double>::quiet_NaN();
+  double battery_pct = std::numeric_limits<double>::quiet_NaN();  ///< 0..100
+  double rssi_dbm = std::numeric_limits<double>::quiet_NaN();     ///< -128..0
+  double temperature_c = std::numeric_limits<double>::quiet_NaN();
 };
 
 class SimSlimeTracker {
