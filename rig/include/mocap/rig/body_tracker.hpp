@@ -118,7 +118,11 @@ class BodyTracker {
   /// Per fitted segment: the slow part of its own and of its reference's signal (high-pass).
   std::array<Eigen::Vector3d, kSegmentCount> slow_own_{}, slow_ref_{};
   std::array<int64_t, kSegmentCount> slow_own_t_ns_{}, slow_ref_t_ns_{};
-  void feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q);
+  /// q_earth_sensor(i) and sensor_health(i) from the filter's output o.
+  Eigen::Quaterniond q_earth_sensor(int i, const FilterOutput& o) const;
+  SensorHealth sensor_health(int i, const FilterOutput& o) const;
+  void feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q,
+                                const Eigen::Vector3d& gyro_bias_rad_s);
   void start_heading_from_motion(const CalibrationResult& r);
   void apply_heading_from_motion(int64_t t_ns);
 };
