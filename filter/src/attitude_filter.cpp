@@ -33,61 +33,62 @@ void AttitudeFilter::refresh_coeffs() {
   const double fallback = st_.gyr_timing.ts_nom_s > 0   ? st_.gyr_timing.ts_nom_s
                           : st_.acc_timing.ts_nom_s > 0 ? st_.acc_timing.ts_nom_s
                                                         : 0.01;
-  c_.gyr_ts_s = st_.gyr_timing.ts_nom_s > 0 ? st_.gyr_timing.ts_nom_s : fallback;
-  c_.acc_ts_s = st_.acc_timing.ts_nom_s > 0 ? st_.acc_timing.ts_nom_s : c_.gyr_ts_s;
-  c_.mag_ts_s = st_.mag_timing.ts_nom_s > 0 ? st_.mag_timing.ts_nom_s : c_.acc_ts_s;
+  c_.ts.gyr_s = st_.gyr_timing.ts_nom_s > 0 ? st_.gyr_timing.ts_nom_s : fallback;
+  c_.ts.acc_s = st_.acc_timing.ts_nom_s > 0 ? st_.acc_timing.ts_nom_s : c_.ts.gyr_s;
+  c_.ts.mag_s = st_.mag_timing.ts_nom_s > 0 ? st_.mag_timing.ts_nom_s : c_.ts.acc_s;
 
-  c_.acc_lp = butterworth(p_.inclination.tau_acc_s, c_.acc_ts_s);
-  c_.rest_gyr_lp = butterworth(p_.rest.filter_tau_s, c_.gyr_ts_s);
-  c_.rest_acc_lp = butterworth(p_.rest.filter_tau_s, c_.acc_ts_s);
-  c_.mag_norm_dip_lp = butterworth(p_.mag_dist.current_tau_s, c_.mag_ts_s);
-  c_.k_mag = gain_from_tau(p_.heading.tau_mag_s, c_.mag_ts_s);
+  c_.acc_lp = butterworth(p_.inclination.tau_acc_s, c_.ts.acc_s);
+  c_.rest.gyr_lp = butterworth(p_.rest.filter_tau_s, c_.ts.gyr_s);
+  c_.rest.acc_lp = butterworth(p_.rest.filter_tau_s, c_.ts.acc_s);
+  c_.mag_dist.norm_dip_lp = butterworth(p_.mag_dist.current_tau_s, c_.ts.mag_s);
+  c_.heading.k_mag = gain_from_tau(p_.heading.tau_mag_s, c_.ts.mag_s);
   // Kalman heading: q = sigma^2 / tau, r = sigma^2 tau / T gives the time constant tau_mag
   // and the steady-state one-sigma heading_sigma_deg in an undisturbed field, at any rate.
   const double sh2 = sq(p_.heading.sigma_deg * kRadPerDeg);
-  c_.heading_q_rad2_s = sh2 / std::max(p_.heading.tau_mag_s, 1e-9);
-  c_.heading_r0_rad2 = sh2 * p_.heading.tau_mag_s / c_.mag_ts_s;
-  c_.k_mag_ref = gain_from_tau(p_.mag_dist.ref_tau_s, c_.mag_ts_s);
+  c_.heading.q_rad2_s = sh2 / std::max(p_.heading.tau_mag_s, 1e-9);
+  c_.heading.r0_rad2 = sh2 * p_.heading.tau_mag_s / c_.ts.mag_s;
+  c_.mag_dist.k_ref = gain_from_tau(p_.mag_dist.ref_tau_s, c_.ts.mag_s);
   // Hard-iron estimator: fixed period in seconds; variances relative to the field norm.
-  c_.hard_iron_decim =
-      std::max(1, static_cast<int>(std::lround(p_.hard_iron.step_s / c_.mag_ts_s)));
-  c_.hard_iron.p0_offset_rel2 = sq(p_.hard_iron.sigma0);
-  c_.hard_iron.q_offset_rel2_s = c_.hard_iron.p0_offset_rel2 / std::max(p_.hard_iron.tau_s, 1e-9);
-  c_.hard_iron.q_field_rel2_s = sq(p_.hard_iron.field_rw_deg * kRadPerDeg);
-  c_.hard_iron.r_rel2 = sq(p_.hard_iron.noise);
-  c_.hard_iron.gate_rel2 = sq(p_.hard_iron.gate);
-  c_.hard_iron.min_offset_rel = p_.hard_iron.min_offset;
-  c_.hard_iron.min_sigmas = p_.hard_iron.min_sigmas;
-  c_.hard_iron.min_sigmas_consistent = p_.hard_iron.consistent_min_sigmas;
-  c_.hard_iron.k_nis = gain_from_tau(p_.hard_iron.nis_tau_s, c_.hard_iron_decim * c_.mag_ts_s);
-  c_.hard_iron.nis_max = p_.hard_iron.nis_max;
-  c_.k_hard_iron_select =
-      gain_from_tau(p_.hard_iron.select_tau_s, c_.hard_iron_decim * c_.mag_ts_s);
-  c_.k_latency = gain_from_tau(p_.mag_latency.tau_s, c_.mag_ts_s);
-  c_.k_latency_hp = gain_from_tau(p_.mag_latency.hp_tau_s, c_.mag_ts_s);
+  c_.hard_iron.decim =
+      std::max(1, static_cast<int>(std::lround(p_.hard_iron.step_s / c_.ts.mag_s)));
+  c_.hard_iron.est.p0_offset_rel2 = sq(p_.hard_iron.sigma0);
+  c_.hard_iron.est.q_offset_rel2_s =
+      c_.hard_iron.est.p0_offset_rel2 / std::max(p_.hard_iron.tau_s, 1e-9);
+  c_.hard_iron.est.q_field_rel2_s = sq(p_.hard_iron.field_rw_deg * kRadPerDeg);
+  c_.hard_iron.est.r_rel2 = sq(p_.hard_iron.noise);
+  c_.hard_iron.est.gate_rel2 = sq(p_.hard_iron.gate);
+  c_.hard_iron.est.min_offset_rel = p_.hard_iron.min_offset;
+  c_.hard_iron.est.min_sigmas = p_.hard_iron.min_sigmas;
+  c_.hard_iron.est.min_sigmas_consistent = p_.hard_iron.consistent_min_sigmas;
+  c_.hard_iron.est.k_nis = gain_from_tau(p_.hard_iron.nis_tau_s, c_.hard_iron.decim * c_.ts.mag_s);
+  c_.hard_iron.est.nis_max = p_.hard_iron.nis_max;
+  c_.hard_iron.k_select =
+      gain_from_tau(p_.hard_iron.select_tau_s, c_.hard_iron.decim * c_.ts.mag_s);
+  c_.mag_latency.k = gain_from_tau(p_.mag_latency.tau_s, c_.ts.mag_s);
+  c_.mag_latency.k_hp = gain_from_tau(p_.mag_latency.hp_tau_s, c_.ts.mag_s);
 
   // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
-  c_.bias_decim = std::max(1, static_cast<int>(std::lround(0.01 / c_.acc_ts_s)));
-  c_.bias_ts_s = c_.bias_decim * c_.acc_ts_s;
-  c_.bias_lp = butterworth(p_.inclination.tau_acc_s, c_.bias_ts_s);
+  c_.bias.decim = std::max(1, static_cast<int>(std::lround(0.01 / c_.ts.acc_s)));
+  c_.bias.ts_s = c_.bias.decim * c_.ts.acc_s;
+  c_.bias.lp = butterworth(p_.inclination.tau_acc_s, c_.bias.ts_s);
   // Bias KF in units of (0.01 deg/s)^2: uncertainty grows by 0.1 deg/s per forgetting time.
-  c_.bias_p0 = sq(p_.bias.sigma_init_deg_s * 100.0);
-  c_.bias_v = sq(0.1 * 100.0) * c_.bias_ts_s / p_.bias.forgetting_time_s;
+  c_.bias.p0 = sq(p_.bias.sigma_init_deg_s * 100.0);
+  c_.bias.v = sq(0.1 * 100.0) * c_.bias.ts_s / p_.bias.forgetting_time_s;
   const double p_motion = sq(p_.bias.sigma_motion_deg_s * 100.0);
-  c_.bias_motion_w = sq(p_motion) / c_.bias_v + p_motion;
-  c_.bias_vertical_w = c_.bias_motion_w / std::max(p_.bias.vertical_forgetting, 1e-10);
+  c_.bias.motion_w = sq(p_motion) / c_.bias.v + p_motion;
+  c_.bias.vertical_w = c_.bias.motion_w / std::max(p_.bias.vertical_forgetting, 1e-10);
   const double p_rest = sq(p_.bias.sigma_rest_deg_s * 100.0);
-  c_.bias_rest_w = sq(p_rest) / c_.bias_v + p_rest;
+  c_.bias.rest_w = sq(p_rest) / c_.bias.v + p_rest;
   // Gyro-gain KF: every gain_decim bias steps (about 10 Hz; the residual is low-passed with
   // tau_acc, so sub-sampling it loses little), in gain units; the measurement noise is the
   // motion bias update's per step, in (rad/s)^2.
-  c_.gain_decim = std::max(1, static_cast<int>(std::lround(0.1 / c_.bias_ts_s)));
-  c_.gain_reg_decim = std::max(1, static_cast<int>(std::lround(0.04 / c_.bias_ts_s)));
-  c_.gain_reg_lp = butterworth(p_.inclination.tau_acc_s, c_.gain_reg_decim * c_.bias_ts_s);
-  const double gain_ts = c_.gain_decim * c_.bias_ts_s;
-  c_.gain_p0 = sq(p_.gyr_gain.sigma_init);
-  c_.gain_v = sq(1e-3) * gain_ts / std::max(p_.gyr_gain.forgetting_time_s, 1e-9);
-  c_.gain_w = c_.bias_motion_w * sq(0.01 * kRadPerDeg);
+  c_.gyr_gain.decim = std::max(1, static_cast<int>(std::lround(0.1 / c_.bias.ts_s)));
+  c_.gyr_gain.reg_decim = std::max(1, static_cast<int>(std::lround(0.04 / c_.bias.ts_s)));
+  c_.gyr_gain.reg_lp = butterworth(p_.inclination.tau_acc_s, c_.gyr_gain.reg_decim * c_.bias.ts_s);
+  const double gain_ts = c_.gyr_gain.decim * c_.bias.ts_s;
+  c_.gyr_gain.p0 = sq(p_.gyr_gain.sigma_init);
+  c_.gyr_gain.v = sq(1e-3) * gain_ts / std::max(p_.gyr_gain.forgetting_time_s, 1e-9);
+  c_.gyr_gain.w = c_.bias.motion_w * sq(0.01 * kRadPerDeg);
 }
 
 // Period of one stream from its timestamps. Returns false (and counts) for a timestamp that
@@ -136,8 +137,8 @@ bool AttitudeFilter::stream_dt(int64_t t_ns, StreamTiming& timing, double& dt_s)
   auto moved = [](double nom, double used) {
     return nom > 0 && std::abs(nom - used) > 0.02 * used;
   };
-  if (moved(st_.gyr_timing.ts_nom_s, c_.gyr_ts_s) || moved(st_.acc_timing.ts_nom_s, c_.acc_ts_s) ||
-      moved(st_.mag_timing.ts_nom_s, c_.mag_ts_s))
+  if (moved(st_.gyr_timing.ts_nom_s, c_.ts.gyr_s) || moved(st_.acc_timing.ts_nom_s, c_.ts.acc_s) ||
+      moved(st_.mag_timing.ts_nom_s, c_.ts.mag_s))
     refresh_coeffs();
   return true;
 }
@@ -190,8 +191,8 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
 
 // Rest detection, gyro part: deviation from the low-passed rate.
 void AttitudeFilter::update_rest_gyr(const Eigen::Vector3d& gyr) {
-  const double ts = c_.gyr_ts_s;
-  const auto& lp = st_.rest.gyr_lp.step(gyr.data(), c_.rest_gyr_lp, p_.rest.filter_tau_s, ts);
+  const double ts = c_.ts.gyr_s;
+  const auto& lp = st_.rest.gyr_lp.step(gyr.data(), c_.rest.gyr_lp, p_.rest.filter_tau_s, ts);
   st_.rest.last_gyr_lp = Eigen::Vector3d(lp[0], lp[1], lp[2]);
   st_.rest.dev_gyr2 = (gyr - st_.rest.last_gyr_lp).squaredNorm();
   const double clip = p_.bias.clip_deg_s * kRadPerDeg;
@@ -211,8 +212,8 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   if (!update_inclination(acc)) return;
   st_.bias.corr_sum += st_.inclination.last_acc_earth.head<2>();
   st_.gyr_gain.gyr_sum_rad_s += st_.strapdown.last_gyr_rad_s;
-  if (++st_.bias.n >= c_.bias_decim) {
-    update_bias(Eigen::Vector3d(st_.bias.corr_sum.x(), st_.bias.corr_sum.y(), 1.0), c_.bias_ts_s);
+  if (++st_.bias.n >= c_.bias.decim) {
+    update_bias(Eigen::Vector3d(st_.bias.corr_sum.x(), st_.bias.corr_sum.y(), 1.0), c_.bias.ts_s);
     st_.bias.n = 0;
     st_.bias.corr_sum.setZero();
     st_.gyr_gain.gyr_sum_rad_s.setZero();
@@ -221,8 +222,8 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
 
 // Rest detection, acc part: rest once both deviations stayed small for rest.min_t_s.
 void AttitudeFilter::update_rest_acc(const Eigen::Vector3d& acc) {
-  const double ts = c_.acc_ts_s;
-  const auto& alp = st_.rest.acc_lp.step(acc.data(), c_.rest_acc_lp, p_.rest.filter_tau_s, ts);
+  const double ts = c_.ts.acc_s;
+  const auto& alp = st_.rest.acc_lp.step(acc.data(), c_.rest.acc_lp, p_.rest.filter_tau_s, ts);
   st_.rest.dev_acc2 = (acc - Eigen::Vector3d(alp[0], alp[1], alp[2])).squaredNorm();
   const double thg = p_.rest.th_gyr_deg_s * kRadPerDeg, tha = p_.rest.th_acc_m_s2;
   if (st_.rest.dev_gyr2 >= thg * thg || st_.rest.dev_acc2 >= tha * tha ||
@@ -239,7 +240,7 @@ void AttitudeFilter::update_rest_acc(const Eigen::Vector3d& acc) {
 // shortest rotation taking it onto +z is applied to q_acc. False (nothing changed) when the
 // low-passed acc has no direction; else its direction is last_acc_earth.
 bool AttitudeFilter::update_inclination(const Eigen::Vector3d& acc) {
-  const double ts = c_.acc_ts_s;
+  const double ts = c_.ts.acc_s;
   const Eigen::Vector3d acc_i = st_.strapdown.q_gyr * acc;
   const auto& f =
       st_.inclination.acc_lp.step(acc_i.data(), c_.acc_lp, p_.inclination.tau_acc_s, ts);
@@ -264,7 +265,7 @@ bool AttitudeFilter::update_inclination(const Eigen::Vector3d& acc) {
 // acc_e holds the horizontal inclination corrections summed over the last ts seconds.
 void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   if (!st_.bias.p_init) {
-    st_.bias.p = Eigen::Matrix3d::Identity() * c_.bias_p0;
+    st_.bias.p = Eigen::Matrix3d::Identity() * c_.bias.p0;
     st_.bias.p_init = true;
   }
   const Eigen::Matrix3d r6 = (st_.inclination.q_acc * st_.strapdown.q_gyr).toRotationMatrix();
@@ -274,7 +275,7 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   // The error the current estimates remove: bias plus gain times the block's mean rate.
   Eigen::Vector3d b_applied = st_.bias.rad_s;
   if (gain_on) {
-    const Eigen::Vector3d w = st_.gyr_gain.gyr_sum_rad_s / c_.bias_decim - st_.bias.rad_s;
+    const Eigen::Vector3d w = st_.gyr_gain.gyr_sum_rad_s / c_.bias.decim - st_.bias.rad_s;
     b_applied += st_.gyr_gain.matrix() * w;
     update_gain_regressor(r6, w, ts);
   }
@@ -285,12 +286,12 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         rr[3 * i + j] = r6(i, j);
-    const auto& rl = st_.bias.motion_r_lp.step(rr, c_.bias_lp, p_.inclination.tau_acc_s, ts);
+    const auto& rl = st_.bias.motion_r_lp.step(rr, c_.bias.lp, p_.inclination.tau_acc_s, ts);
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         r_lp(i, j) = rl[3 * i + j];
     const double rb[2] = {r6.row(0).dot(b_applied), r6.row(1).dot(b_applied)};
-    const auto& bl = st_.bias.motion_bias_lp.step(rb, c_.bias_lp, p_.inclination.tau_acc_s, ts);
+    const auto& bl = st_.bias.motion_bias_lp.step(rb, c_.bias.lp, p_.inclination.tau_acc_s, ts);
     rb_lp = Eigen::Vector2d(bl[0], bl[1]);
   }
   Eigen::Vector3d e, w;
@@ -299,27 +300,27 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   if (st_.rest.at_rest && p_.bias.rest_est) {
     e = st_.rest.last_gyr_lp - b;
     cm = Eigen::Matrix3d::Identity();
-    w.setConstant(c_.bias_rest_w);
+    w.setConstant(c_.bias.rest_w);
   } else if (p_.bias.motion_est) {
     e.x() = -acc_e.y() / ts + rb_lp.x() - r_lp.row(0).dot(b);
     e.y() = acc_e.x() / ts + rb_lp.y() - r_lp.row(1).dot(b);
     e.z() = -r_lp.row(2).dot(b);
     if (gain_on) {
       e.head<2>() -= reg * st_.gyr_gain.g;
-      if (++st_.gyr_gain.n >= c_.gain_decim) {
+      if (++st_.gyr_gain.n >= c_.gyr_gain.decim) {
         st_.gyr_gain.n = 0;
         const double clip = p_.bias.clip_deg_s * kRadPerDeg;
         update_gain(e.head<2>().cwiseMax(-clip).cwiseMin(clip), reg, r_lp);
       }
     }
     cm = r_lp;
-    w = Eigen::Vector3d(c_.bias_motion_w, c_.bias_motion_w, c_.bias_vertical_w);
+    w = Eigen::Vector3d(c_.bias.motion_w, c_.bias.motion_w, c_.bias.vertical_w);
   } else {
     w.setConstant(-1);
   }
   // Process noise while the uncertainty is below its initial value.
   for (int i = 0; i < 3; ++i)
-    if (st_.bias.p(i, i) < c_.bias_p0) st_.bias.p(i, i) += c_.bias_v;
+    if (st_.bias.p(i, i) < c_.bias.p0) st_.bias.p(i, i) += c_.bias.v;
   if (w.x() < 0) return;
   const double clip = p_.bias.clip_deg_s * kRadPerDeg;
   e = e.cwiseMax(-clip).cwiseMin(clip);
@@ -337,14 +338,14 @@ void AttitudeFilter::update_gain_regressor(const Eigen::Matrix3d& r6, const Eige
   for (int r = 0; r < 2; ++r)
     for (int i = 0; i < 3; ++i)
       st_.gyr_gain.reg_sum.block<1, 3>(r, 3 * i) += r6(r, i) * w.transpose();
-  if (++st_.gyr_gain.reg_n >= c_.gain_reg_decim) {
+  if (++st_.gyr_gain.reg_n >= c_.gyr_gain.reg_decim) {
     double g[18];
     const double inv = 1.0 / st_.gyr_gain.reg_n;
     for (int r = 0; r < 2; ++r)
       for (int k = 0; k < 9; ++k)
         g[9 * r + k] = st_.gyr_gain.reg_sum(r, k) * inv;
-    const auto& gl = st_.gyr_gain.reg_lp.step(g, c_.gain_reg_lp, p_.inclination.tau_acc_s,
-                                              ts * c_.gain_reg_decim);
+    const auto& gl = st_.gyr_gain.reg_lp.step(g, c_.gyr_gain.reg_lp, p_.inclination.tau_acc_s,
+                                              ts * c_.gyr_gain.reg_decim);
     for (int r = 0; r < 2; ++r)
       for (int k = 0; k < 9; ++k)
         st_.gyr_gain.reg(r, k) = gl[9 * r + k];
@@ -358,15 +359,15 @@ void AttitudeFilter::update_gain(const Eigen::Vector2d& residual,
                                  const Eigen::Matrix<double, 2, 9>& reg,
                                  const Eigen::Matrix3d& r_lp) {
   if (!st_.gyr_gain.p_init) {
-    st_.gyr_gain.p = Eigen::Matrix<double, 9, 9>::Identity() * c_.gain_p0;
+    st_.gyr_gain.p = Eigen::Matrix<double, 9, 9>::Identity() * c_.gyr_gain.p0;
     st_.gyr_gain.p_init = true;
   }
   for (int i = 0; i < 9; ++i)
-    if (st_.gyr_gain.p(i, i) < c_.gain_p0) st_.gyr_gain.p(i, i) += c_.gain_v;
+    if (st_.gyr_gain.p(i, i) < c_.gyr_gain.p0) st_.gyr_gain.p(i, i) += c_.gyr_gain.v;
   // Measurement noise: the motion update's plus the current bias uncertainty.
   const Eigen::Matrix<double, 2, 3> cb = r_lp.topRows<2>() * (0.01 * kRadPerDeg);
   Eigen::Matrix2d s = cb * st_.bias.p * cb.transpose();
-  s.diagonal().array() += c_.gain_w;
+  s.diagonal().array() += c_.gyr_gain.w;
   const Eigen::Matrix<double, 9, 2> ph = st_.gyr_gain.p * reg.transpose();
   s += reg * ph;
   const Eigen::Matrix<double, 9, 2> k = ph * s.inverse();

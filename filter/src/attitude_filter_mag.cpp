@@ -60,13 +60,13 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
 void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag_raw, const Eigen::Quaterniond& q6,
                                       double dt_s) {
   HardIronState& h = st_.hard_iron;
-  h.dt_s += dt_s > 0 ? dt_s : c_.mag_ts_s;
-  if (++h.n < c_.hard_iron_decim) return;
+  h.dt_s += dt_s > 0 ? dt_s : c_.ts.mag_s;
+  if (++h.n < c_.hard_iron.decim) return;
   const double lat_s = mag_latency_s();
   const Eigen::Vector3d w = st_.strapdown.last_gyr_rad_s - st_.bias.rad_s;
   const Eigen::Vector3d m_c = mag_raw - lat_s * w.cross(mag_raw - h.est.used_uT);
   const Eigen::Matrix3d r6 = q6.toRotationMatrix();
-  h.est.step(m_c, r6, std::min(h.dt_s, 1.0), st_.mag_dist.ref_norm, c_.hard_iron);
+  h.est.step(m_c, r6, std::min(h.dt_s, 1.0), st_.mag_dist.ref_norm, c_.hard_iron.est);
   h.n = 0;
   h.dt_s = 0;
   select_hard_iron(r6 * m_c, r6 * (m_c - h.est.used_uT));
@@ -85,7 +85,7 @@ void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
     if (h.restarts != hs.restarts_seen || !(h.nis < p_.hard_iron.consistent_nis))
       hs.consistent_s = 0;
     else
-      hs.consistent_s += c_.hard_iron_decim * c_.mag_ts_s;
+      hs.consistent_s += c_.hard_iron.decim * c_.ts.mag_s;
     hs.restarts_seen = h.restarts;
     consistent = ref_norm > 0 && hs.consistent_s >= p_.hard_iron.consistent_s;
   }
@@ -102,7 +102,7 @@ void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
       if (!(n > 0)) return 0.0;
       return std::min(field_deviation2(n, dip_rad(m, n), ref_norm, st_.mag_dist.ref_dip), 25.0);
     };
-    hs.select += c_.k_hard_iron_select * (score(m_raw_e) - score(m_corr_e) - hs.select);
+    hs.select += c_.hard_iron.k_select * (score(m_raw_e) - score(m_corr_e) - hs.select);
     hs.weight = std::clamp(hs.select / p_.hard_iron.select_margin, 0.0, 1.0);
   }
   hs.applied_uT = hs.weight * h.used_uT;
@@ -120,7 +120,7 @@ Eigen::Vector3d AttitudeFilter::mag_to_earth(const Eigen::Vector3d& mag,
   Eigen::Vector3d m_e = q6 * mag;
   if (p_.mag_latency.tau_s > 0) {
     const Eigen::Vector3d v_e = q6 * (st_.strapdown.last_gyr_rad_s - st_.bias.rad_s).cross(mag);
-    st_.mag_latency.step(m_e, v_e, c_.k_latency_hp, c_.k_latency);
+    st_.mag_latency.step(m_e, v_e, c_.mag_latency.k_hp, c_.mag_latency.k);
     m_e -= mag_latency_s() * v_e;
   }
   return m_e;
@@ -131,10 +131,10 @@ Eigen::Vector3d AttitudeFilter::mag_to_earth(const Eigen::Vector3d& mag,
 void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
   MagDisturbanceState& d = st_.mag_dist;
   const MagDisturbanceParams& p = p_.mag_dist;
-  const double ts = c_.mag_ts_s;
+  const double ts = c_.ts.mag_s;
   const double n = m_e.norm();
   const double nd[2] = {n, dip_rad(m_e, n)};
-  const auto& f = d.norm_dip_lp.step(nd, c_.mag_norm_dip_lp, p.current_tau_s, ts);
+  const auto& f = d.norm_dip_lp.step(nd, c_.mag_dist.norm_dip_lp, p.current_tau_s, ts);
   d.norm_dip[0] = f[0];
   d.norm_dip[1] = f[1];
   const double norm = f[0], dip = f[1];
@@ -143,8 +143,8 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
     d.undisturbed_t_s += ts;
     if (d.undisturbed_t_s >= p.min_undisturbed_time_s) {
       d.disturbed = false;
-      d.ref_norm += c_.k_mag_ref * (norm - d.ref_norm);
-      d.ref_dip += c_.k_mag_ref * (dip - d.ref_dip);
+      d.ref_norm += c_.mag_dist.k_ref * (norm - d.ref_norm);
+      d.ref_dip += c_.mag_dist.k_ref * (dip - d.ref_dip);
     }
   } else {
     d.undisturbed_t_s = 0;
@@ -157,8 +157,8 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
     if (d.ref_norm == 0 || st_.rest.last_gyr_lp.norm() >= p.new_min_gyr_deg_s * kRadPerDeg)
       d.cand_t_s += ts;
     d.cand_age_s += ts;
-    d.cand_norm += c_.k_mag_ref * (norm - d.cand_norm);
-    d.cand_dip += c_.k_mag_ref * (dip - d.cand_dip);
+    d.cand_norm += c_.mag_dist.k_ref * (norm - d.cand_norm);
+    d.cand_dip += c_.mag_dist.k_ref * (dip - d.cand_dip);
     if (d.disturbed &&
         (d.cand_t_s >= p.new_time_s || (d.ref_norm == 0 && d.cand_t_s >= p.new_first_time_s))) {
       if (!d.have_ref) end_mag_startup();
@@ -182,7 +182,7 @@ void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double dt_s) {
   HeadingState& h = st_.heading;
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - h.delta_rad);
   const double sb2 = st_.bias.p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
-  h.delta_var_rad2 += (c_.heading_q_rad2_s + sb2) * (dt_s > 0 ? dt_s : c_.mag_ts_s);  // real gap
+  h.delta_var_rad2 += (c_.heading.q_rad2_s + sb2) * (dt_s > 0 ? dt_s : c_.ts.mag_s);  // real gap
   const double r = heading_measurement_var();
   const double k = heading_gain(h.delta_var_rad2 / (h.delta_var_rad2 + r));
   h.delta_rad = wrap_pi(h.delta_rad + k * err);
@@ -194,7 +194,7 @@ void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double dt_s) {
 // relative to its threshold, and by the rejection time not yet repaid.
 double AttitudeFilter::heading_measurement_var() const {
   const MagDisturbanceState& d = st_.mag_dist;
-  double r = c_.heading_r0_rad2;
+  double r = c_.heading.r0_rad2;
   if (p_.mag_dist.rejection && (d.ref_norm > 0 || d.cand_norm > 0)) {
     // Deviations from the reference, or before one exists from the candidate.
     const bool ref = d.ref_norm > 0;
@@ -214,7 +214,7 @@ double AttitudeFilter::heading_measurement_var() const {
 // field; the very first sample sets it); K >= k_init (1/N over tau_mag_s), counting only
 // samples that pass the tests.
 double AttitudeFilter::heading_gain(double k) {
-  const double ts = c_.mag_ts_s;
+  const double ts = c_.ts.mag_s;
   MagDisturbanceState& d = st_.mag_dist;
   HeadingState& h = st_.heading;
   bool use_init = true;
@@ -232,7 +232,8 @@ double AttitudeFilter::heading_gain(double k) {
         d.reject_t_s += ts;
         k = 0;
       } else {
-        k = std::min(k, c_.k_mag) / p_.mag_dist.rejection_factor;  // backstop: nominal gain at most
+        k = std::min(k, c_.heading.k_mag) /
+            p_.mag_dist.rejection_factor;  // backstop: nominal gain at most
       }
     } else {
       d.reject_t_s = std::max(d.reject_t_s - p_.mag_dist.rejection_factor * ts, 0.0);
@@ -252,7 +253,7 @@ double AttitudeFilter::heading_gain(double k) {
 void AttitudeFilter::end_mag_startup() {
   st_.mag_dist.have_ref = true;
   st_.heading.k_init =
-      st_.heading.delta_var_rad2 / (st_.heading.delta_var_rad2 + c_.heading_r0_rad2);
+      st_.heading.delta_var_rad2 / (st_.heading.delta_var_rad2 + c_.heading.r0_rad2);
 }
 
 // Predicted to the newest gyro sample (the magnetometer may be slower or missing).
@@ -262,7 +263,7 @@ double AttitudeFilter::heading_sigma_rad() const {
       std::max(static_cast<double>(st_.gyr_timing.t_ns - st_.mag_timing.t_ns), 0.0) * 1e-9;
   const double sb2 = st_.bias.p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
   return std::sqrt(
-      std::max(st_.heading.delta_var_rad2 + (c_.heading_q_rad2_s + sb2) * since_mag_s, 0.0));
+      std::max(st_.heading.delta_var_rad2 + (c_.heading.q_rad2_s + sb2) * since_mag_s, 0.0));
 }
 
 }  // namespace mocap

@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "mocap/core/imu_sample.hpp"
+#include "mocap/filter/filter_coeffs.hpp"
 #include "mocap/filter/filter_params.hpp"
 #include "mocap/filter/filter_state.hpp"
 
@@ -25,26 +26,6 @@ struct FilterCounters {
   uint64_t out_of_range = 0;  ///< absurd magnitude
   uint64_t bad_time = 0;      ///< timestamp not after the previous one of the same stream
   uint64_t gaps = 0;          ///< gaps longer than 5 nominal periods
-};
-
-/// Coefficients derived from params and the sampling periods (not saved; recomputed).
-struct FilterCoeffs {
-  double gyr_ts_s = 0, acc_ts_s = 0, mag_ts_s = 0;
-  LowpassCoeffs acc_lp, rest_gyr_lp, rest_acc_lp, mag_norm_dip_lp;
-  HardIronCoeffs hard_iron;
-  double k_hard_iron_select = 0;
-  int hard_iron_decim = 1;  ///< estimator runs every hard_iron_decim magnetometer samples
-  double k_mag = 0, k_mag_ref = 0;
-  double k_latency = 0, k_latency_hp = 0;
-  int bias_decim = 1;     ///< bias KF runs every bias_decim acc samples (about 100 Hz)
-  double bias_ts_s = 0;   ///< its period
-  LowpassCoeffs bias_lp;  ///< tau_acc low-pass at the bias KF rate
-  double bias_p0 = 0, bias_v = 0, bias_motion_w = 0, bias_vertical_w = 0, bias_rest_w = 0;
-  double heading_q_rad2_s = 0, heading_r0_rad2 = 0;
-  int gain_reg_decim = 1;  ///< its regressor is low-passed every gain_reg_decim bias steps
-  LowpassCoeffs gain_reg_lp;
-  int gain_decim = 1;  ///< gyro-gain KF runs every gain_decim bias steps (about 10 Hz)
-  double gain_p0 = 0, gain_v = 0, gain_w = 0;
 };
 
 /// The filter's state flags, as a consumer reads them.
