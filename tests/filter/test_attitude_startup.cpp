@@ -65,8 +65,8 @@ TEST(AttitudeStartup, NoMagnetometerMeansNoReferenceFlagOff) {
 }
 
 TEST(AttitudeStartup, MagHeadingCorrectionOnceConverged) {
-  // mag_heading_rad(): the magnetometer's turn of the 6D orientation, NaN without a magnetometer
-  // and during the first moments of start-up (heading not converged yet).
+  // output().mag_heading_rad: the magnetometer's turn of the 6D orientation, NaN without a
+  // magnetometer and during the first moments of start-up (heading not converged yet).
   SynthConfig c;
   c.q0 = start_attitude();
   c.duration_s = 5;
