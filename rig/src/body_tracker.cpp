@@ -133,6 +133,7 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
 void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q,
                                            const Eigen::Vector3d& gyro_bias_rad_s) {
   constexpr double kHighPassTauS = 1.0;  // slower than a step, faster than a tilt error's drift
+  constexpr double kLowPassTauS = 0.03;  // about 5 Hz
   constexpr double kGravity_m_s2 = 9.81;
   const size_t k = static_cast<size_t>(i);
   const int seg = sensors_[k].segment;
@@ -154,39 +155,41 @@ void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eige
     return q_aligned * a - Eigen::Vector3d(0, 0, kGravity_m_s2);
   };
   // The same high-pass for both signals of a pair (it commutes with the yaw sought).
-  const auto high_pass = [&](const Eigen::Vector3d& v, Eigen::Vector3d& slow, int64_t& t_ns) {
-    if (t_ns == 0)
-      slow = v;
-    else
-      slow += std::clamp((s.t_host_ns - t_ns) * 1e-9 / kHighPassTauS, 0.0, 1.0) * (v - slow);
-    t_ns = s.t_host_ns;
-    return Eigen::Vector3d(v - slow);
+  // The same band-pass for both signals of a pair (it commutes with the yaw sought): the
+  // high-pass removes each filter's slow gravity leak, the low-pass the jitter above a few Hz
+  // (skin, the rotation terms' differentiated rate) that carries no joint motion.
+  const auto band_pass = [&](const Eigen::Vector3d& v, BandPass& f) {
+    if (f.t_ns == 0) {
+      f.slow = v;
+      f.fast = v;
+    } else {
+      const double step_s = static_cast<double>(s.t_host_ns - f.t_ns) * 1e-9;
+      f.slow += std::clamp(step_s / kHighPassTauS, 0.0, 1.0) * (v - f.slow);
+      f.fast += std::clamp(step_s / kLowPassTauS, 0.0, 1.0) * (v - f.fast);
+    }
+    f.t_ns = s.t_host_ns;
+    return Eigen::Vector3d(f.fast - f.slow);
   };
-  // As a fitted segment: its sensor's acceleration (its joint's, but for the rotation about the
-  // joint, whose direction in the sensor frame depends on the very alignment sought), or its
-  // rate when the reference is further up than its parent.
+  // As a fitted segment: the acceleration of its own joint (its origin) from its sensor, with
+  // the rotation terms of the lever arm's part along the site normal (its direction in the
+  // sensor frame does not depend on the alignment sought; the rest is left out); the rate
+  // when acc_reference_ is false.
   if (heading_.reference(seg) >= 0) {
-    if (heading_.reference(seg) == kSegmentParent[seg])
-      heading_.add(seg,
-                   high_pass(acc_at(Eigen::Vector3d::Zero()), slow_own_[seg], slow_own_t_ns_[seg]),
-                   s.t_host_ns);
+    if (acc_reference_[seg])
+      heading_.add(seg, band_pass(acc_at(own_joint_m_[seg]), own_band_[seg]), s.t_host_ns);
     else
       heading_.add(seg, q_aligned * w, s.t_host_ns);
   }
-  // As a reference: the acceleration of the joint it shares with each segment fitted to it
-  // (from the standard site, skeleton/sensor_sites.hpp), or its rate.
-  const BodyModel& model = skeleton_.model();
+  // As a reference: the acceleration of that joint from this sensor (site from
+  // skeleton/sensor_sites.hpp, joint through any untracked segment between, held in its
+  // calibration pose), or its rate.
   for (int child = 0; child < kSegmentCount; ++child) {
     if (heading_.reference(child) != seg) continue;
-    if (kSegmentParent[child] == seg) {
-      const Eigen::Vector3d joint_m =
-          model.joint_offset_m(child) -
-          standard_site_position_m(static_cast<Segment>(seg), model.dimensions());
+    if (acc_reference_[child])
       heading_.add_reference(
-          child, high_pass(acc_at(joint_m), slow_ref_[child], slow_ref_t_ns_[child]), s.t_host_ns);
-    } else {
+          child, band_pass(acc_at(joint_in_reference_m_[child]), ref_band_[child]), s.t_host_ns);
+    else
       heading_.add_reference(child, q_aligned * w, s.t_host_ns);
-    }
   }
 }
 
@@ -217,22 +220,87 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
         p = kSegmentParent[p];
       reference[s] = p;
     }
+  // Segments aligned from their own horizontal site normal are refined against the same
+  // evidence, within a band (a strap tilted off the normal turns that alignment). Not the upper
+  // arms: the shoulder girdle moves on the torso, which the model holds rigid, so the shoulder's
+  // acceleration from the torso's sensor is off.
+  refine_.fill(false);
+  turned_rad_.fill(0);
+  if (opt_.heading_from_motion.refine_max_deg > 0 &&
+      opt_.calibrator.heading == HeadingSource::mount_normals)
+    for (int s = 0; s < kSegmentCount; ++s) {
+      if (!known(s) || !own[s] || !r.heading_from_own_normal[s]) continue;
+      if (s == index(Segment::upper_arm_l) || s == index(Segment::upper_arm_r)) continue;
+      int p = kSegmentParent[s];
+      while (p >= 0 && !known(p))
+        p = kSegmentParent[p];
+      if (p < 0) continue;
+      reference[s] = p;
+      refine_[s] = true;
+    }
   heading_.reset(reference);
-  slow_own_t_ns_.fill(0);
-  slow_ref_t_ns_.fill(0);
+  // Joint accelerations pair a segment with its parent or, through the neck (never tracked,
+  // short and stiff: held in its calibration pose), the head with the torso; further up (a
+  // foot under an untracked shank) the knee's own motion would dominate: rates instead.
+  const BodyModel& model = skeleton_.model();
+  for (int s = 0; s < kSegmentCount; ++s) {
+    acc_reference_[s] = false;
+    const int p = kSegmentParent[s];
+    if (reference[s] < 0 || p < 0) continue;
+    const int ref = reference[s];
+    if (ref != p && !(p == index(Segment::neck) && ref == kSegmentParent[p])) continue;
+    acc_reference_[s] = true;
+    // The joint (s's origin) in the reference's frame.
+    Eigen::Vector3d joint_m = model.joint_offset_m(s);
+    if (ref != p)
+      joint_m =
+          model.joint_offset_m(p) + q_body_segment_in_pose(r.calibration.pose, ref).conjugate() *
+                                        (q_body_segment_in_pose(r.calibration.pose, p) * joint_m);
+    // The own lever arm: whole where the mounting is known from the N-pose (a refined
+    // segment), else only its part along the site normal.
+    const Eigen::Vector3d site_m =
+        standard_site_position_m(static_cast<Segment>(s), model.dimensions());
+    const Eigen::Vector3d n = standard_site_normal_body(static_cast<Segment>(s));
+    own_joint_m_[s] = refine_[s] ? Eigen::Vector3d(-site_m) : Eigen::Vector3d(-n.dot(site_m) * n);
+    joint_in_reference_m_[s] =
+        joint_m - standard_site_position_m(static_cast<Segment>(ref), model.dimensions());
+  }
+  own_band_.fill({});
+  ref_band_.fill({});
+  heading_found_ = refine_;  // a refined segment starts aligned
 }
 
 void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   constexpr int64_t kEveryNs = 100'000'000;  // 10 Hz: the alignment is a slow constant
   constexpr double kMinTurnRad = 0.1 * kRadPerDeg;
   if (t_ns - heading_applied_t_ns_ < kEveryNs) return;
+  const double max_turn_rad =
+      opt_.heading_from_motion.max_drift_deg_s * kRadPerDeg * static_cast<double>(kEveryNs) * 1e-9;
   heading_applied_t_ns_ = t_ns;
+  const double dead_band_rad = opt_.heading_from_motion.refine_dead_band_deg * kRadPerDeg;
+  const double refine_max_rad = opt_.heading_from_motion.refine_max_deg * kRadPerDeg;
   Calibration c = skeleton_.calibration();
   bool changed = false;
   for (int s = 0; s < kSegmentCount; ++s) {
     double yaw = 0;
     if (!heading_.estimate(s, yaw)) continue;
     if (std::abs(yaw) < kMinTurnRad) continue;
+    // A refined segment moves only when the evidence is off by more than the fit's own bias
+    // (model mismatch: joint centres, carrying angle), and stays within its band.
+    if (refine_[s]) {
+      if (std::abs(yaw) <= dead_band_rad) continue;
+      yaw -= std::copysign(dead_band_rad, yaw);
+    }
+    // The first estimate aligns; afterwards the alignment only follows the slow drift of the
+    // 6D heading, so a stretch of misleading motion cannot turn it over.
+    if (heading_found_[s]) yaw = std::clamp(yaw, -max_turn_rad, max_turn_rad);
+    if (refine_[s]) {
+      const double total_rad = std::clamp(turned_rad_[s] + yaw, -refine_max_rad, refine_max_rad);
+      yaw = total_rad - turned_rad_[s];
+      turned_rad_[s] = total_rad;
+      if (std::abs(yaw) < 1e-9) continue;
+    }
+    heading_found_[s] = true;
     // The sensor's frame turns by yaw; its mounting keeps the segment's calibration pose:
     // q_ss' = q_ss T^-1 Y^-1 T with T the segment's orientation at calibration.
     const Eigen::Quaterniond y(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));

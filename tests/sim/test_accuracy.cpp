@@ -54,20 +54,39 @@ TEST(RealMotion, SixDRigCalibratesFromTheSiteNormals) {
   o.use_mag = false;
   const AccuracyResult r = run_accuracy(o);
   ASSERT_TRUE(r.calibrated) << r.calibration_message;
-  // The segments whose site normal is horizontal: within a few degrees of the ideally aligned
-  // filters (the straps' misalignment turns each alignment). Measured in docs/accuracy.md.
-  for (Segment s : {Segment::pelvis, Segment::torso, Segment::thigh_l, Segment::thigh_r,
-                    Segment::upper_arm_l, Segment::upper_arm_r})
+  // The segments whose site normal is horizontal: aligned in the N-pose, then refined from
+  // their joints' accelerations within a band (a strap tilted off its normal turns the N-pose
+  // alignment): measured at most +1.5 deg over the ideally aligned filters (N-pose alone: the
+  // right forearm +4.3). Upper arms are not refined (the shoulder girdle is not modelled).
+  for (Segment s :
+       {Segment::pelvis, Segment::torso, Segment::thigh_l, Segment::thigh_r, Segment::shank_l,
+        Segment::shank_r, Segment::forearm_l, Segment::forearm_r, Segment::hand_l, Segment::hand_r})
+    EXPECT_LE(r.metric_segment_deg[index(s)], r.alone_segment_deg[index(s)] + 3.0) << name(s);
+  for (Segment s : {Segment::upper_arm_l, Segment::upper_arm_r})
     EXPECT_LE(r.metric_segment_deg[index(s)], r.alone_segment_deg[index(s)] + 6.0) << name(s);
   // Head and feet (vertical site normals) are aligned from motion during the walk (their
-  // acceleration against the joint centre's from the sensor above): measured 3.5 / 3.1 / 2.3 deg
-  // (rate fit before: 5.4 / 10.3 / 11.1; a heading borrowed from the segment above: 30 / 29 / 6).
+  // acceleration against the joint centre's from the sensor above): measured 0.9 / 2.0 / 1.9 deg
+  // (head by rates, no band-pass or rate limit: 3.5 / 3.1 / 2.3; rate fit for all: 5.4 / 10.3 /
+  // 11.1; a heading borrowed from the segment above: 30 / 29 / 6).
   for (Segment s : {Segment::head, Segment::foot_l, Segment::foot_r})
-    EXPECT_LE(r.metric_segment_deg[index(s)], 7.0) << name(s);
-  // Target (mean <= 1.5 x the ideally aligned filters): measured 2.0 x on this short clip
-  // (the arms' strap misalignment weighs more in 3.9 s), 1.52 x over the 24 clips
-  // (docs/accuracy.md). A regression guard.
-  EXPECT_LE(r.metric_mean_deg, 2.5 * r.alone_mean_deg);
+    EXPECT_LE(r.metric_segment_deg[index(s)], 4.0) << name(s);
+  // Target (mean <= 1.5 x the ideally aligned filters): measured 1.48 x on this short clip
+  // (2.0 x before the head-through-neck pairing and the refinement), 1.32 x over the 24 clips
+  // (docs/accuracy.md).
+  EXPECT_LE(r.metric_mean_deg, 1.7 * r.alone_mean_deg);
+}
+
+// Swordplay: lunges and swings whose head accelerations mislead the fit for stretches. The head
+// is paired with the torso through the neck, both signals band-passed, and a found alignment
+// turns no faster than a 6D heading drifts: measured head 1.7 deg against 0.85 for the ideally
+// aligned filter (rates through the neck, no rate limit: 10.9 deg, 45 deg off in heading).
+TEST(RealMotion, SixDHeadAlignmentHoldsThroughSwordplay) {
+  AccuracyOptions o = after_moves(clip("02_08"), 1);
+  o.use_mag = false;
+  const AccuracyResult r = run_accuracy(o);
+  ASSERT_TRUE(r.calibrated) << r.calibration_message;
+  const int head = index(Segment::head);
+  EXPECT_LE(r.metric_segment_deg[head], r.alone_segment_deg[head] + 3.0);
 }
 
 // A sloppy N-pose: the clip's own first frame held (bent elbows, arms off the body) instead of

@@ -115,9 +115,25 @@ class BodyTracker {
   /// acceleration of the joint-centre signal.
   std::vector<Eigen::Vector3d> prev_w_rad_s_;
   std::vector<int64_t> prev_w_t_ns_;
-  /// Per fitted segment: the slow part of its own and of its reference's signal (high-pass).
-  std::array<Eigen::Vector3d, kSegmentCount> slow_own_{}, slow_ref_{};
-  std::array<int64_t, kSegmentCount> slow_own_t_ns_{}, slow_ref_t_ns_{};
+  /// One signal's band-pass state (see feed_heading_from_motion).
+  struct BandPass {
+    Eigen::Vector3d slow = Eigen::Vector3d::Zero(), fast = Eigen::Vector3d::Zero();
+    int64_t t_ns = 0;  ///< 0: no sample yet
+  };
+  /// Per fitted segment: its own signal's and its reference's band-pass.
+  std::array<BandPass, kSegmentCount> own_band_{}, ref_band_{};
+  /// Per fitted segment: paired by joint acceleration (else by rate); its joint in the
+  /// reference's segment frame from the reference's site, and in its own frame from its own
+  /// site along the site normal (the part whose direction in the sensor frame does not depend
+  /// on the alignment sought), metres.
+  std::array<bool, kSegmentCount> acc_reference_{};
+  std::array<Eigen::Vector3d, kSegmentCount> joint_in_reference_m_{}, own_joint_m_{};
+  /// Per fitted segment: its first alignment was applied (later ones are rate-limited).
+  std::array<bool, kSegmentCount> heading_found_{};
+  /// Per segment: aligned from its own site normal and refined from motion within a band, and
+  /// how far it has been turned so far, rad.
+  std::array<bool, kSegmentCount> refine_{};
+  std::array<double, kSegmentCount> turned_rad_{};
   /// q_earth_sensor(i) and sensor_health(i) from the filter's output o.
   Eigen::Quaterniond q_earth_sensor(int i, const FilterOutput& o) const;
   SensorHealth sensor_health(int i, const FilterOutput& o) const;

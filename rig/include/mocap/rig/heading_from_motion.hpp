@@ -2,15 +2,17 @@
 // instep) cannot be read in the N-pose, so it is found from motion. The segment and its parent
 // (with an aligned sensor) share a joint, so they share its acceleration: the parent's sensor
 // gives the joint centre's (its specific force plus the rotation terms out to the joint, gravity
-// removed), the segment's own sensor gives nearly the same vector (the joint's but for the
-// rotation about it, left out because its direction in the sensor frame depends on the very
-// alignment sought). The yaw that maps the segment's horizontal acceleration onto the parent's
-// is the missing alignment, for any joint (no axis assumed). The caller high-passes both signals
-// alike (a filter commutes with the yaw and removes each filter's slow gravity leak); the fit is
-// a weighted circular mean of the angle between them, each instant's weight saturating (a jump
-// must not outvote seconds of walking), forgotten over tau_s so slow heading drift is followed.
-// A reference further up than the parent (no sensor between) gives angular rates instead: the
-// horizontal rates of a foot and the thigh above follow each other, more loosely.
+// removed; for the head through the neck, held in its calibration pose), the segment's own
+// sensor nearly the same vector (the joint's but for the rotation terms of the lever arm across
+// the site normal, whose direction in the sensor frame depends on the very alignment sought).
+// The yaw that maps the segment's horizontal acceleration onto the parent's is the missing
+// alignment, for any joint (no axis assumed). The caller band-passes both signals alike (a
+// filter commutes with the yaw; it removes each filter's slow gravity leak and the jitter above
+// a few Hz); the fit is a weighted circular mean of the angle between them, each instant's
+// weight saturating (a jump must not outvote seconds of walking), forgotten over tau_s so slow
+// heading drift is followed, and once found the caller turns it no faster than a 6D heading
+// drifts. A reference further up (a foot under an untracked shank) gives angular rates
+// instead: the horizontal rates of a foot and the thigh above follow each other, more loosely.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,6 +32,16 @@ struct HeadingFromMotionOptions {
   double saturation = 1.0;
   /// A reference sample older than this is not paired with a segment's sample, seconds.
   double max_pair_age_s = 0.02;
+  /// After the first alignment the caller turns it at most this fast, deg/s: a mount is
+  /// constant and a 6D heading drifts far slower, so a stretch of misleading motion (a foot
+  /// on a bar, a sword swing) cannot turn a found alignment over.
+  double max_drift_deg_s = 2.0;
+  /// Sensors aligned from a horizontal site normal in the N-pose are refined by the same fit:
+  /// only when it disagrees by more than refine_dead_band_deg (the fit's own bias from the body
+  /// model's joint centres) and by at most refine_max_deg in all (a strap tilted off its
+  /// normal). 0 disables.
+  double refine_max_deg = 10.0;
+  double refine_dead_band_deg = 4.0;
 };
 
 class HeadingFromMotion {
