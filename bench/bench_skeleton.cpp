@@ -105,7 +105,7 @@ TrackerCost tracker_cost(double& sink) {
                                                       AttitudeFilter(FilterParams{}));
                   for (const ImuSample& s : samples)
                     filters[s.sensor_id].update(s);
-                  sink = sink + filters[3].q_earth_sensor().w();
+                  sink = sink + filters[3].output().q_earth_sensor.w();
                 }) /
       span_ns;
   return c;

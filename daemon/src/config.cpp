@@ -560,10 +560,10 @@ void read_by_hand(TableReader& b, BodyConfig& body, Ctx& ctx) {
 }
 void read_by_hand(TableReader& f, FilterConfig& filter, Ctx&) {
   for (const FilterParamEntry& e : filter_param_table()) {
-    if (auto* m = std::get_if<bool FilterParams::*>(&e.member))
-      f.boolean(e.name, filter.params.*(*m));
+    if (e.is_flag())
+      f.boolean(e.name, e.flag(filter.params));
     else
-      f.any_number(e.name, filter.params.*std::get<double FilterParams::*>(e.member));
+      f.any_number(e.name, e.number(filter.params));
   }
 }
 

@@ -125,8 +125,9 @@ const Section<FilterConfig>& section() {
   static const Section<S> s{
       "filter",
       "Besides `use_mag`, every parameter of the attitude filter (`FilterParams` in "
-      "filter/include/mocap/filter/attitude_filter.hpp, where each one's meaning and unit are "
-      "given; docs/filter.md) is a key, e.g. `tau_mag_s = 12`, `rest_th_gyr_deg_s = 1.5`. "
+      "filter/include/mocap/filter/filter_params.hpp, one struct per stage, where each one's "
+      "meaning, unit and default are given; docs/filter.md) is a key, e.g. `tau_mag_s = 12`, "
+      "`rest_th_gyr_deg_s = 1.5`; the last column names the member a key sets. "
       "--print-config writes those that differ from the filter's defaults.",
       k};
   return s;

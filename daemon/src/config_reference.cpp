@@ -106,14 +106,14 @@ std::string section_markdown(const keys::Section<S>& sec) {
     for (const FilterParamEntry& e : filter_param_table()) {
       Row r;
       r.key = e.name;
-      if (auto* m = std::get_if<bool FilterParams::*>(&e.member)) {
+      if (e.is_flag()) {
         r.type = "boolean";
-        r.def = defaults.*(*m) ? "true" : "false";
+        r.def = e.flag(defaults) ? "true" : "false";
       } else {
         r.type = "number";
-        r.def = number_text(defaults.*std::get<double FilterParams::*>(e.member));
+        r.def = number_text(e.number(defaults));
       }
-      r.help = "`FilterParams::" + r.key + "`";
+      r.help = "`FilterParams::" + std::string(e.member) + "`";
       add(r);
     }
   }

@@ -63,11 +63,10 @@ void write_by_hand(toml::table& t, const BodyConfig& b) {
 void write_by_hand(toml::table& t, const FilterConfig& f) {
   static const FilterParams defaults;
   for (const FilterParamEntry& e : filter_param_table()) {
-    if (auto* m = std::get_if<bool FilterParams::*>(&e.member)) {
-      if (f.params.*(*m) != defaults.*(*m)) t.insert(e.name, f.params.*(*m));
+    if (e.is_flag()) {
+      if (e.flag(f.params) != e.flag(defaults)) t.insert(e.name, e.flag(f.params));
     } else {
-      auto d = std::get<double FilterParams::*>(e.member);
-      const double v = f.params.*d, v0 = defaults.*d;
+      const double v = e.number(f.params), v0 = e.number(defaults);
       if (std::memcmp(&v, &v0, sizeof v) != 0) t.insert(e.name, v);
     }
   }

@@ -70,7 +70,8 @@ void run_trial(const BroadTrial& trial, FilterAlgorithm alg, FilterMode mode,
       out.resize(trial.size());
       for (size_t i = 0; i < trial.size(); ++i) {
         f.update(trial_sample(trial, i, mode));
-        out[i] = mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();
+        const FilterOutput o = f.output();
+        out[i] = mag ? o.q_earth_sensor : o.q_earth_sensor_6d;
       }
       return;
     }

@@ -1,4 +1,5 @@
-// Table of FilterParams members by name, for overrides and reports.
+// Table of FilterParams members by their user-visible names (config keys, --set), for
+// overrides and reports: one line per key, naming the per-stage member it binds.
 #include "mocap/filter/filter_param_names.hpp"
 
 #include <charconv>
@@ -10,64 +11,73 @@ namespace {
 
 using Entry = FilterParamEntry;
 
-#define D(n)             \
-  Entry {                \
-#n, &FilterParams::n \
+/// The member Field of the stage struct Stage of p.
+template <auto Stage, auto Field>
+auto& bind(FilterParams& p) {
+  return (p.*Stage).*Field;
+}
+
+// KEY: the user-visible name (config key, --set); STAGE.FIELD: the member it binds.
+#define P(KEY, STAGE, FIELD)                                                                      \
+  Entry {                                                                                         \
+#KEY, #STAGE "." #FIELD, &bind < &FilterParams::STAGE, &decltype(FilterParams::STAGE)::FIELD> \
   }
-const Entry kEntries[] = {D(tau_acc_s),
-                          D(tau_mag_s),
-                          D(heading_sigma_deg),
-                          D(mag_trust_weight),
-                          D(rest_bias_est),
-                          D(motion_bias_est),
-                          D(bias_sigma_init_deg_s),
-                          D(bias_forgetting_time_s),
-                          D(bias_clip_deg_s),
-                          D(bias_sigma_motion_deg_s),
-                          D(bias_vertical_forgetting),
-                          D(bias_sigma_rest_deg_s),
-                          D(gyr_gain_sigma_init),
-                          D(gyr_gain_forgetting_time_s),
-                          D(gyr_gain_clip),
-                          D(rest_min_t_s),
-                          D(rest_filter_tau_s),
-                          D(rest_th_gyr_deg_s),
-                          D(rest_th_acc_m_s2),
-                          D(mag_dist_rejection),
-                          D(mag_current_tau_s),
-                          D(mag_ref_tau_s),
-                          D(mag_norm_th),
-                          D(mag_dip_th_deg),
-                          D(mag_new_time_s),
-                          D(mag_new_first_time_s),
-                          D(mag_new_min_gyr_deg_s),
-                          D(mag_min_undisturbed_time_s),
-                          D(mag_max_rejection_time_s),
-                          D(mag_rejection_factor),
-                          D(hard_iron_tau_s),
-                          D(hard_iron_sigma0),
-                          D(hard_iron_field_rw_deg),
-                          D(hard_iron_noise),
-                          D(hard_iron_gate),
-                          D(hard_iron_min_offset),
-                          D(hard_iron_min_sigmas),
-                          D(hard_iron_nis_tau_s),
-                          D(hard_iron_nis_max),
-                          D(hard_iron_step_s),
-                          D(hard_iron_select_tau_s),
-                          D(hard_iron_select_margin),
-                          D(hard_iron_consistent_nis),
-                          D(hard_iron_consistent_s),
-                          D(hard_iron_consistent_min_sigmas),
-                          D(mag_latency_tau_s),
-                          D(mag_latency_hp_tau_s),
-                          D(mag_latency_min_rate_deg_s),
-                          D(mag_latency_max_s),
-                          D(max_gap_s),
-                          D(max_gyr_rad_s),
-                          D(max_acc_m_s2),
-                          D(max_mag_uT)};
-#undef D
+const Entry kEntries[] = {
+    P(tau_acc_s, inclination, tau_acc_s),
+    P(tau_mag_s, heading, tau_mag_s),
+    P(heading_sigma_deg, heading, sigma_deg),
+    P(mag_trust_weight, mag_dist, trust_weight),
+    P(rest_bias_est, bias, rest_est),
+    P(motion_bias_est, bias, motion_est),
+    P(bias_sigma_init_deg_s, bias, sigma_init_deg_s),
+    P(bias_forgetting_time_s, bias, forgetting_time_s),
+    P(bias_clip_deg_s, bias, clip_deg_s),
+    P(bias_sigma_motion_deg_s, bias, sigma_motion_deg_s),
+    P(bias_vertical_forgetting, bias, vertical_forgetting),
+    P(bias_sigma_rest_deg_s, bias, sigma_rest_deg_s),
+    P(gyr_gain_sigma_init, gyr_gain, sigma_init),
+    P(gyr_gain_forgetting_time_s, gyr_gain, forgetting_time_s),
+    P(gyr_gain_clip, gyr_gain, clip),
+    P(rest_min_t_s, rest, min_t_s),
+    P(rest_filter_tau_s, rest, filter_tau_s),
+    P(rest_th_gyr_deg_s, rest, th_gyr_deg_s),
+    P(rest_th_acc_m_s2, rest, th_acc_m_s2),
+    P(mag_dist_rejection, mag_dist, rejection),
+    P(mag_current_tau_s, mag_dist, current_tau_s),
+    P(mag_ref_tau_s, mag_dist, ref_tau_s),
+    P(mag_norm_th, mag_dist, norm_th),
+    P(mag_dip_th_deg, mag_dist, dip_th_deg),
+    P(mag_new_time_s, mag_dist, new_time_s),
+    P(mag_new_first_time_s, mag_dist, new_first_time_s),
+    P(mag_new_min_gyr_deg_s, mag_dist, new_min_gyr_deg_s),
+    P(mag_min_undisturbed_time_s, mag_dist, min_undisturbed_time_s),
+    P(mag_max_rejection_time_s, mag_dist, max_rejection_time_s),
+    P(mag_rejection_factor, mag_dist, rejection_factor),
+    P(hard_iron_tau_s, hard_iron, tau_s),
+    P(hard_iron_sigma0, hard_iron, sigma0),
+    P(hard_iron_field_rw_deg, hard_iron, field_rw_deg),
+    P(hard_iron_noise, hard_iron, noise),
+    P(hard_iron_gate, hard_iron, gate),
+    P(hard_iron_min_offset, hard_iron, min_offset),
+    P(hard_iron_min_sigmas, hard_iron, min_sigmas),
+    P(hard_iron_nis_tau_s, hard_iron, nis_tau_s),
+    P(hard_iron_nis_max, hard_iron, nis_max),
+    P(hard_iron_step_s, hard_iron, step_s),
+    P(hard_iron_select_tau_s, hard_iron, select_tau_s),
+    P(hard_iron_select_margin, hard_iron, select_margin),
+    P(hard_iron_consistent_nis, hard_iron, consistent_nis),
+    P(hard_iron_consistent_s, hard_iron, consistent_s),
+    P(hard_iron_consistent_min_sigmas, hard_iron, consistent_min_sigmas),
+    P(mag_latency_tau_s, mag_latency, tau_s),
+    P(mag_latency_hp_tau_s, mag_latency, hp_tau_s),
+    P(mag_latency_min_rate_deg_s, mag_latency, min_rate_deg_s),
+    P(mag_latency_max_s, mag_latency, max_s),
+    P(max_gap_s, input, max_gap_s),
+    P(max_gyr_rad_s, input, max_gyr_rad_s),
+    P(max_acc_m_s2, input, max_acc_m_s2),
+    P(max_mag_uT, input, max_mag_uT),
+};
+#undef P
 
 }  // namespace
 
@@ -84,11 +94,11 @@ bool set_filter_param(FilterParams& p, std::string_view a, std::string& error) {
   const std::string_view name = a.substr(0, eq), val = a.substr(eq + 1);
   for (const auto& e : kEntries) {
     if (name != e.name) continue;
-    if (auto* m = std::get_if<bool FilterParams::*>(&e.member)) {
+    if (e.is_flag()) {
       if (val == "1" || val == "true")
-        p.*(*m) = true;
+        e.flag(p) = true;
       else if (val == "0" || val == "false")
-        p.*(*m) = false;
+        e.flag(p) = false;
       else {
         error = "expected true/false for " + std::string(name);
         return false;
@@ -101,7 +111,7 @@ bool set_filter_param(FilterParams& p, std::string_view a, std::string& error) {
       error = "not a number: '" + std::string(val) + "'";
       return false;
     }
-    p.*std::get<double FilterParams::*>(e.member) = v;
+    e.number(p) = v;
     return true;
   }
   error = "unknown filter parameter '" + std::string(name) + "'";
@@ -112,11 +122,10 @@ std::string describe_filter_params(const FilterParams& p) {
   std::string out;
   char buf[128];
   for (const auto& e : kEntries) {
-    if (auto* m = std::get_if<bool FilterParams::*>(&e.member))
-      std::snprintf(buf, sizeof buf, "%s=%s\n", e.name, p.*(*m) ? "true" : "false");
+    if (e.is_flag())
+      std::snprintf(buf, sizeof buf, "%s=%s\n", e.name, e.flag(p) ? "true" : "false");
     else
-      std::snprintf(buf, sizeof buf, "%s=%g\n", e.name,
-                    p.*std::get<double FilterParams::*>(e.member));
+      std::snprintf(buf, sizeof buf, "%s=%g\n", e.name, e.number(p));
     out += buf;
   }
   return out;

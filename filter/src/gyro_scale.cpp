@@ -8,7 +8,7 @@
 
 #include "mocap/core/units.hpp"
 
-namespace mocap::filt {
+namespace mocap {
 
 namespace {
 
@@ -124,4 +124,4 @@ GyroScaleResult estimate_gyro_scale(std::span<const ImuSample> s, const GyroScal
   return r;
 }
 
-}  // namespace mocap::filt
+}  // namespace mocap

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace mocap::filt {
+namespace mocap {
 
 // Joint prior around the current offset: b ~ (b, p0 F^2 I); c = R (m - b) inherits b's
 // uncertainty (perfectly anti-correlated) plus the measurement noise.
@@ -29,6 +29,14 @@ void HardIronEstimator::restart(const Eigen::Vector3d& m_uT, const Eigen::Matrix
 void HardIronEstimator::step(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es, double dt_s,
                              double f_ref_uT, const HardIronCoeffs& k) {
   if (f_ref_uT > 0) f_uT = f_ref_uT;
+  update(m_uT, r_es, dt_s, k);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(p.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
+  offset_sigma_uT = std::sqrt(std::max(es.eigenvalues()(2), 0.0));
+}
+
+void HardIronEstimator::update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es,
+                               double dt_s, const HardIronCoeffs& k) {
   if (!init) {
     init = true;
     restart(m_uT, r_es, k);
@@ -101,10 +109,4 @@ void HardIronEstimator::gate(const HardIronCoeffs& k) {
   }
 }
 
-double HardIronEstimator::offset_sigma_uT() const {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
-  es.computeDirect(p.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
-  return std::sqrt(std::max(es.eigenvalues()(2), 0.0));
-}
-
-}  // namespace mocap::filt
+}  // namespace mocap

@@ -61,20 +61,26 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       prev_w_t_ns_(sensors_.size(), 0) {}
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
+  return q_earth_sensor(i, filters_[static_cast<size_t>(i)].output());
+}
+
+Eigen::Quaterniond BodyTracker::q_earth_sensor(int i, const FilterOutput& o) const {
   if (is_source_[static_cast<size_t>(i)]) return q_source_[static_cast<size_t>(i)];
-  const AttitudeFilter& f = filters_[static_cast<size_t>(i)];
-  return opt_.use_mag ? f.q_earth_sensor() : f.q_earth_sensor_6d();
+  return opt_.use_mag ? o.q_earth_sensor : o.q_earth_sensor_6d;
 }
 
 SensorHealth BodyTracker::sensor_health(int i) const {
+  if (i < 0 || i >= sensor_count()) return SensorHealth{};
+  return sensor_health(i, filters_[static_cast<size_t>(i)].output());
+}
+
+SensorHealth BodyTracker::sensor_health(int i, const FilterOutput& o) const {
   SensorHealth h;
-  if (i < 0 || i >= sensor_count()) return h;
-  const AttitudeFilter& f = filters_[static_cast<size_t>(i)];
-  h.at_rest = f.at_rest();
-  h.mag_disturbed = opt_.use_mag && f.mag_disturbed();
-  h.mag_no_reference = opt_.use_mag && f.mag_no_reference();
-  h.gyro_bias_rad_s = f.gyro_bias_rad_s().norm();
-  h.heading_sigma_rad = opt_.use_mag ? f.heading_sigma_rad() : 0.0;
+  h.at_rest = o.flags.at_rest;
+  h.mag_disturbed = opt_.use_mag && o.flags.mag_disturbed;
+  h.mag_no_reference = opt_.use_mag && o.flags.mag_no_reference;
+  h.gyro_bias_rad_s = o.gyro_bias_rad_s.norm();
+  h.heading_sigma_rad = opt_.use_mag ? o.heading_sigma_rad : 0.0;
   const int seg = sensors_[static_cast<size_t>(i)].segment;
   const Calibration& c = skeleton_.calibration();
   h.calibrated = seg >= 0 && c.valid && c.calibrated[seg];
@@ -101,7 +107,8 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
   const int seg = sensor.segment;
   if (seg < 0) return;
-  const Eigen::Quaterniond q = q_earth_sensor(i);
+  const FilterOutput o = f.output();
+  const Eigen::Quaterniond q = q_earth_sensor(i, o);
   // 3. Calibration capture.
   if (calibrator_.capturing()) {
     calibrator_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
@@ -116,21 +123,22 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
   }
   // 4. 6D: the heading of the sensors whose site normal could not give it, from motion.
   if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
-    feed_heading_from_motion(i, s, q);
+    feed_heading_from_motion(i, s, q, o.gyro_bias_rad_s);
     apply_heading_from_motion(s.t_host_ns);
   }
   // 5. The segment's input: orientation and the filter's flags.
-  skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, sensor_health(i).segment_flags());
+  skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, sensor_health(i, o).segment_flags());
 }
 
-void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q) {
+void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q,
+                                           const Eigen::Vector3d& gyro_bias_rad_s) {
   constexpr double kHighPassTauS = 1.0;  // slower than a step, faster than a tilt error's drift
   constexpr double kLowPassTauS = 0.03;  // about 5 Hz
   constexpr double kGravity_m_s2 = 9.81;
   const size_t k = static_cast<size_t>(i);
   const int seg = sensors_[k].segment;
   const Calibration& c = skeleton_.calibration();
-  const Eigen::Vector3d w = s.gyr_rad_s - filters_[k].gyro_bias_rad_s();
+  const Eigen::Vector3d w = s.gyr_rad_s - gyro_bias_rad_s;
   const double dt_s = static_cast<double>(s.t_host_ns - prev_w_t_ns_[k]) * 1e-9;
   const bool have_dw = prev_w_t_ns_[k] != 0 && dt_s > 0 && dt_s < 0.05;
   const Eigen::Vector3d dw =

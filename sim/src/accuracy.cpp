@@ -91,7 +91,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   std::array<Eigen::Quaterniond, Performer::kSensorCount> alone_align;
   alone_align.fill(Eigen::Quaterniond::Identity());
   const auto alone_q = [&](int id) {
-    return o.use_mag ? alone[id].q_earth_sensor() : alone[id].q_earth_sensor_6d();
+    const FilterOutput out = alone[id].output();
+    return o.use_mag ? out.q_earth_sensor : out.q_earth_sensor_6d;
   };
   std::array<bool, kSegmentCount> scored{};
   for (int id = 0; id < Performer::kSensorCount; ++id)
@@ -190,7 +191,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       if (r.frames == 1) heading0_deg[id] = h;
       const double dh = std::remainder(h - heading0_deg[id], 360.0);
       heading_sq[id] += dh * dh;
-      if (tracker.filter(id).mag_disturbed() && o.use_mag) ++mag_disturbed[id];
+      if (tracker.filter(id).output().flags.mag_disturbed && o.use_mag) ++mag_disturbed[id];
       const double c = std::clamp((q_err * Eigen::Vector3d::UnitZ()).z(), -1.0, 1.0);
       incl_sq[id] += std::pow(std::acos(c) * kDegPerRad, 2);
     }

@@ -62,8 +62,7 @@ std::vector<ImuSample> table_spin_samples(SensorErrorModel model, const Magnetic
 }
 
 Eigen::Vector3d calibrated_gyro_scale(const SensorErrorModel& model, double rate_hz) {
-  return filt::estimate_gyro_scale(table_spin_samples(model, MagneticFieldParams{}, rate_hz))
-      .scale();
+  return estimate_gyro_scale(table_spin_samples(model, MagneticFieldParams{}, rate_hz)).scale();
 }
 
 }  // namespace mocap::sim

@@ -326,12 +326,12 @@ TEST(Config, ValidatorsReportAtTheKey) {
       "driver=\"witmotion\"\nport=\"/dev/x\"\n",
       "rig.toml", {}, errs, &v);
   ASSERT_TRUE(c) << errs.to_string();
-  EXPECT_EQ(c->filter.params.tau_mag_s, 12.0);
+  EXPECT_EQ(c->filter.params.heading.tau_mag_s, 12.0);
   EXPECT_FALSE(c->filter.use_mag);
   // Round trip through print-config keeps the filter parameter as a number.
   auto c2 = parse_config(config_to_toml(*c), "printed", {}, errs, &v);
   ASSERT_TRUE(c2) << errs.to_string();
-  EXPECT_EQ(c2->filter.params.tau_mag_s, 12.0);
+  EXPECT_EQ(c2->filter.params.heading.tau_mag_s, 12.0);
 
   c = parse_config(
       "[filter]\ntau_acc_z = 1.0\n[[sensor]]\nname=\"a\"\ndriver=\"bogus\"\n"

@@ -39,18 +39,18 @@ TEST(ConfigKeys, FilterKeysAreTypedFilterParamsMembers) {
       "0.1234567890123456789\n",
       "rig.toml", {}, errs);
   ASSERT_TRUE(c) << errs.to_string();
-  EXPECT_EQ(c->filter.params.tau_mag_s, 12.0);
-  EXPECT_FALSE(c->filter.params.rest_bias_est);
-  EXPECT_EQ(c->filter.params.heading_sigma_deg, 0.1234567890123456789);
+  EXPECT_EQ(c->filter.params.heading.tau_mag_s, 12.0);
+  EXPECT_FALSE(c->filter.params.bias.rest_est);
+  EXPECT_EQ(c->filter.params.heading.sigma_deg, 0.1234567890123456789);
   // Untouched members keep the filter's defaults.
-  EXPECT_EQ(c->filter.params.tau_acc_s, FilterParams{}.tau_acc_s);
+  EXPECT_EQ(c->filter.params.inclination.tau_acc_s, FilterParams{}.inclination.tau_acc_s);
   // Printed: only the members that differ from the defaults, at full precision.
   const std::string printed = config_to_toml(*c);
   EXPECT_NE(printed.find("tau_mag_s = 12"), std::string::npos) << printed;
   EXPECT_EQ(printed.find("tau_acc_s"), std::string::npos) << printed;
   auto back = parse_config(printed, "printed", {}, errs);
   ASSERT_TRUE(back) << errs.to_string();
-  EXPECT_EQ(back->filter.params.heading_sigma_deg, c->filter.params.heading_sigma_deg);
+  EXPECT_EQ(back->filter.params.heading.sigma_deg, c->filter.params.heading.sigma_deg);
   // A boolean member takes a boolean, a number member a number; errors name the key.
   for (const char* bad : {"rest_bias_est = 1.5", "tau_mag_s = true", "tau_mag_s = \"12\""}) {
     ConfigErrors e;
@@ -63,7 +63,7 @@ TEST(ConfigKeys, FilterKeysAreTypedFilterParamsMembers) {
   // --set reaches them as well.
   auto s = parse_config("", "rig.toml", {"filter.tau_mag_s=7.25"}, errs);
   ASSERT_TRUE(s) << errs.to_string();
-  EXPECT_EQ(s->filter.params.tau_mag_s, 7.25);
+  EXPECT_EQ(s->filter.params.heading.tau_mag_s, 7.25);
 }
 
 TEST(ConfigKeys, EnumsReadByName) {
@@ -142,7 +142,7 @@ hid = true
   EXPECT_EQ(back->sensors[0].log_level, LogLevel::debug);
   EXPECT_EQ(back->sensors[1].serial, "X1");
   EXPECT_TRUE(back->sensors[1].hid);
-  EXPECT_EQ(back->filter.params.tau_mag_s, 3.3333333333333335);
+  EXPECT_EQ(back->filter.params.heading.tau_mag_s, 3.3333333333333335);
 }
 
 // A string holding ''' and a newline (toml++ would print it as a literal string that does not

@@ -214,7 +214,7 @@ double joint_rmse_deg(const char* motion, uint64_t seed, Segment joint, Setup se
   return n ? std::sqrt(sum_sq / n) / kRadPerDeg : 1e9;
 }
 
-// Each sensor's gyr_scale from its one-time table-spin calibration (filt::estimate_gyro_scale on
+// Each sensor's gyr_scale from its one-time table-spin calibration (estimate_gyro_scale on
 // the virtual sensor's spins) reaches the filters and the skeleton: the left hip after the turn
 // motion's 180 deg turns (seed 2, the closest cell of the accuracy grid), where the gyros' scale
 // errors turn the thigh's and the pelvis's headings apart.

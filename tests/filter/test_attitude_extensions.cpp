@@ -36,8 +36,8 @@ Rms run_rms(AttitudeFilter& f, const SynthStream& s, double t_from_s) {
   for (size_t i = 0; i < s.samples.size(); ++i) {
     f.update(s.samples[i]);
     if (s.samples[i].t_host_ns * 1e-9 < t_from_s) continue;
-    const double t = tilt_deg(f.q_earth_sensor_6d(), s.truth[i]);
-    const double a = angle_deg(f.q_earth_sensor(), s.truth[i]);
+    const double t = tilt_deg(f.output().q_earth_sensor_6d, s.truth[i]);
+    const double a = angle_deg(f.output().q_earth_sensor, s.truth[i]);
     st += t * t;
     sa += a * a;
     ++n;
@@ -54,21 +54,23 @@ TEST(AttitudeExtensions, GyroGainIsEstimatedAndReducesTiltDrift) {
   for (auto& smp : s.samples)
     if (smp.has(kFieldGyr)) smp.gyr_rad_s = (Eigen::Matrix3d::Identity() + g_true) * smp.gyr_rad_s;
   FilterParams off;
-  off.gyr_gain_sigma_init = 0;
+  off.gyr_gain.sigma_init = 0;
   AttitudeFilter f_on, f_off(off);
   const Rms on = run_rms(f_on, s, 90), plain = run_rms(f_off, s, 90);
   EXPECT_LT(on.tilt_deg, 0.5 * plain.tilt_deg) << on.tilt_deg << " vs " << plain.tilt_deg;
   EXPECT_LT(on.tilt_deg, 0.5);
   // The z scale (the spin axis) is well excited; the estimate must be close.
-  EXPECT_NEAR(f_on.gyro_gain()(2, 2), g_true(2, 2), 0.002) << f_on.gyro_gain();
-  EXPECT_TRUE(f_off.gyro_gain().isZero());
+  EXPECT_NEAR(f_on.state().gyr_gain.matrix()(2, 2), g_true(2, 2), 0.002)
+      << f_on.state().gyr_gain.matrix();
+  EXPECT_TRUE(f_off.state().gyr_gain.matrix().isZero());
 }
 
 TEST(AttitudeExtensions, GyroGainStaysZeroWithoutErrors) {
   const auto s = make_stream(spinning(90));
   AttitudeFilter f;
   const Rms r = run_rms(f, s, 30);
-  EXPECT_LT(f.gyro_gain().cwiseAbs().maxCoeff(), 0.002) << f.gyro_gain();
+  EXPECT_LT(f.state().gyr_gain.matrix().cwiseAbs().maxCoeff(), 0.002)
+      << f.state().gyr_gain.matrix();
   EXPECT_LT(r.tilt_deg, 0.5);
 }
 
@@ -90,12 +92,12 @@ TEST(AttitudeExtensions, MagnetometerLatencyIsEstimatedAndCompensated) {
   for (size_t i = s.samples.size() - 1; i >= kLag; --i)
     s.samples[i].mag_uT = s.samples[i - kLag].mag_uT;
   FilterParams off;
-  off.mag_latency_tau_s = 0;
+  off.mag_latency.tau_s = 0;
   AttitudeFilter f_on, f_off(off);
   const Rms on = run_rms(f_on, s, 60), plain = run_rms(f_off, s, 60);
   const FilterParams& p = f_on.params();
   const double l_s =
-      f_on.state().mag_latency.latency_s(p.mag_latency_min_rate_deg_s * kDeg, p.mag_latency_max_s);
+      f_on.state().mag_latency.latency_s(p.mag_latency.min_rate_deg_s * kDeg, p.mag_latency.max_s);
   EXPECT_NEAR(l_s, 0.020, 0.003);
   EXPECT_LT(on.total_deg, 0.5 * plain.total_deg) << on.total_deg << " vs " << plain.total_deg;
 }
@@ -114,12 +116,12 @@ TEST(AttitudeExtensions, HeadingSigmaShrinksWithUpdatesAndGrowsWithout) {
     const double t = smp.t_host_ns * 1e-9;
     if (t >= 30 && t < 60) smp.valid &= ~kFieldMag;  // magnetometer lost for 30 s
     f.update(smp);
-    if (sigma_30 == 0 && t >= 30) sigma_30 = f.heading_sigma_rad();
-    if (sigma_60 == 0 && t >= 60) sigma_60 = f.heading_sigma_rad();
+    if (sigma_30 == 0 && t >= 30) sigma_30 = f.output().heading_sigma_rad;
+    if (sigma_60 == 0 && t >= 60) sigma_60 = f.output().heading_sigma_rad;
   }
-  const double sigma_90 = f.heading_sigma_rad();
+  const double sigma_90 = f.output().heading_sigma_rad;
   // Converged: about heading_sigma_deg; without the magnetometer it grows; back, it shrinks.
-  EXPECT_LT(sigma_30, 2.0 * f.params().heading_sigma_deg * kDeg);
+  EXPECT_LT(sigma_30, 2.0 * f.params().heading.sigma_deg * kDeg);
   EXPECT_GT(sigma_60, 1.5 * sigma_30);
   EXPECT_LT(sigma_90, 0.7 * sigma_60);
 }
@@ -140,7 +142,7 @@ TEST(AttitudeExtensions, SoftTrustSlowsAPullBelowTheThresholds) {
   };
   const auto s = make_stream(c);
   FilterParams hard;
-  hard.mag_trust_weight = 0;
+  hard.mag_dist.trust_weight = 0;
   AttitudeFilter soft_f, hard_f(hard);
   double err_soft = 0, err_hard = 0;
   for (size_t i = 0; i < s.samples.size(); ++i) {
@@ -148,11 +150,11 @@ TEST(AttitudeExtensions, SoftTrustSlowsAPullBelowTheThresholds) {
     hard_f.update(s.samples[i]);
     const double t = s.samples[i].t_host_ns * 1e-9;
     if (t >= 30 && t < 36) {
-      err_soft = std::max(err_soft, angle_deg(soft_f.q_earth_sensor(), s.truth[i]));
-      err_hard = std::max(err_hard, angle_deg(hard_f.q_earth_sensor(), s.truth[i]));
+      err_soft = std::max(err_soft, angle_deg(soft_f.output().q_earth_sensor, s.truth[i]));
+      err_hard = std::max(err_hard, angle_deg(hard_f.output().q_earth_sensor, s.truth[i]));
     }
   }
-  EXPECT_FALSE(hard_f.mag_disturbed());  // the binary test does not see it
+  EXPECT_FALSE(hard_f.output().flags.mag_disturbed);  // the binary test does not see it
   EXPECT_LT(err_soft, 0.85 * err_hard) << err_soft << " vs " << err_hard;
   EXPECT_GT(err_soft, 1.0);  // it does follow, more slowly
 }

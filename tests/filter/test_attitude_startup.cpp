@@ -27,27 +27,28 @@ TEST(AttitudeStartup, NoReferenceFlagMarksStartupApartFromDisturbance) {
   };
   const auto s = make_stream(c);
   AttitudeFilter f;
-  EXPECT_FALSE(f.mag_no_reference());  // no magnetometer seen yet
+  EXPECT_FALSE(f.output().flags.mag_no_reference);  // no magnetometer seen yet
   bool no_ref_early = true, disturbed_early = false, no_ref_late = false, flagged = false;
   for (const auto& smp : s.samples) {
     f.update(smp);
     const double t = smp.t_host_ns * 1e-9;
     const FilterOutput o = f.output();
-    EXPECT_EQ(o.mag_no_reference, f.mag_no_reference());
-    EXPECT_EQ(o.mag_disturbed, f.mag_disturbed());
-    EXPECT_FALSE(o.mag_no_reference && o.mag_disturbed);  // two distinct states
-    if (t < 4) {
-      no_ref_early &= o.mag_no_reference;
-      disturbed_early |= o.mag_disturbed;
+    EXPECT_FALSE(o.flags.mag_no_reference && o.flags.mag_disturbed);  // two distinct states
+    if (f.counters().mag_ok > 0) {
+      EXPECT_EQ(o.flags.mag_reference, !o.flags.mag_no_reference);
     }
-    if (t > 10) no_ref_late |= o.mag_no_reference;
-    if (t > 30.2 && t < 32) flagged |= o.mag_disturbed;
+    if (t < 4) {
+      no_ref_early &= o.flags.mag_no_reference;
+      disturbed_early |= o.flags.mag_disturbed;
+    }
+    if (t > 10) no_ref_late |= o.flags.mag_no_reference;
+    if (t > 30.2 && t < 32) flagged |= o.flags.mag_disturbed;
   }
   EXPECT_TRUE(no_ref_early);      // start-up: no reference field yet ...
   EXPECT_FALSE(disturbed_early);  // ... which is not a disturbance
   EXPECT_FALSE(no_ref_late);      // the static earth field became the reference
   EXPECT_TRUE(flagged);           // and a passing magnet is a disturbance, not start-up
-  EXPECT_LT(std::abs(heading_err_deg(f.q_earth_sensor(), s.truth.back())), 1.5);
+  EXPECT_LT(std::abs(heading_err_deg(f.output().q_earth_sensor, s.truth.back())), 1.5);
 }
 
 TEST(AttitudeStartup, NoMagnetometerMeansNoReferenceFlagOff) {
@@ -59,41 +60,41 @@ TEST(AttitudeStartup, NoMagnetometerMeansNoReferenceFlagOff) {
     smp.valid &= ~kFieldMag;
     f.update(smp);
   }
-  EXPECT_FALSE(f.mag_no_reference());
-  EXPECT_FALSE(f.mag_disturbed());
+  EXPECT_FALSE(f.output().flags.mag_no_reference);
+  EXPECT_FALSE(f.output().flags.mag_disturbed);
 }
 
 TEST(AttitudeStartup, MagHeadingCorrectionOnceConverged) {
-  // mag_heading_rad(): the magnetometer's turn of the 6D orientation, NaN without a magnetometer
-  // and during the first moments of start-up (heading not converged yet).
+  // output().mag_heading_rad: the magnetometer's turn of the 6D orientation, NaN without a
+  // magnetometer and during the first moments of start-up (heading not converged yet).
   SynthConfig c;
   c.q0 = start_attitude();
   c.duration_s = 5;
   c.gyr_true = [](double t) -> Eigen::Vector3d { return Eigen::Vector3d(0, 0, 0.5 * std::sin(t)); };
   const auto s = make_stream(c);
   AttitudeFilter f, no_mag;
-  EXPECT_TRUE(std::isnan(f.mag_heading_rad()));
+  EXPECT_TRUE(std::isnan(f.output().mag_heading_rad));
   bool nan_at_first = false, finite_later = true;
   for (const auto& smp : s.samples) {
     f.update(smp);
     ImuSample six = smp;
     six.valid &= ~kFieldMag;
     no_mag.update(six);
-    EXPECT_TRUE(std::isnan(no_mag.mag_heading_rad()));
+    EXPECT_TRUE(std::isnan(no_mag.output().mag_heading_rad));
     const double t = smp.t_host_ns * 1e-9;
-    if (t < 0.05) nan_at_first |= std::isnan(f.mag_heading_rad());
+    if (t < 0.05) nan_at_first |= std::isnan(f.output().mag_heading_rad);
     if (t < 2) continue;
-    finite_later &= std::isfinite(f.mag_heading_rad());
-    const Eigen::Quaterniond turned =
-        Eigen::Quaterniond(Eigen::AngleAxisd(f.mag_heading_rad(), Eigen::Vector3d::UnitZ())) *
-        f.q_earth_sensor_6d();
-    EXPECT_LT(turned.angularDistance(f.q_earth_sensor()), 1e-9);
+    finite_later &= std::isfinite(f.output().mag_heading_rad);
+    const Eigen::Quaterniond turned = Eigen::Quaterniond(Eigen::AngleAxisd(
+                                          f.output().mag_heading_rad, Eigen::Vector3d::UnitZ())) *
+                                      f.output().q_earth_sensor_6d;
+    EXPECT_LT(turned.angularDistance(f.output().q_earth_sensor), 1e-9);
   }
   EXPECT_TRUE(nan_at_first);
   EXPECT_TRUE(finite_later);
   // The start attitude's heading (-1.1 rad) comes from the magnetometer (the 6D frame starts at
   // the sensor's own heading).
-  EXPECT_GT(std::abs(f.mag_heading_rad()), 0.5);
+  EXPECT_GT(std::abs(f.output().mag_heading_rad), 0.5);
 }
 
 // The sensor starts next to a magnet and moves around in its gradient (hand-like motion), so
@@ -124,12 +125,12 @@ TEST(AttitudeStartup, MagnetAtStartThenLeaving) {
   for (size_t i = 0; i < s.samples.size(); ++i) {
     f.update(s.samples[i]);
     const double t = s.samples[i].t_host_ns * 1e-9;
-    ASSERT_TRUE(f.q_earth_sensor().coeffs().allFinite());
-    if (t > 1 && t < leave_s) ref_near_magnet |= !f.mag_no_reference();
+    ASSERT_TRUE(f.output().q_earth_sensor.coeffs().allFinite());
+    if (t > 1 && t < leave_s) ref_near_magnet |= !f.output().flags.mag_no_reference;
     if (t > 35) {
-      disturbed_late |= f.mag_disturbed() || f.mag_no_reference();
+      disturbed_late |= f.output().flags.mag_disturbed || f.output().flags.mag_no_reference;
       max_err_late =
-          std::max(max_err_late, std::abs(heading_err_deg(f.q_earth_sensor(), s.truth[i])));
+          std::max(max_err_late, std::abs(heading_err_deg(f.output().q_earth_sensor, s.truth[i])));
     }
   }
   EXPECT_FALSE(ref_near_magnet);  // an inconsistent field is never a reference
@@ -166,13 +167,13 @@ TEST(AttitudeStartup, BurstAtStartDoesNotLockTheSamplePeriod) {
     if (k == 20) smp.t_host_ns = burst_end_ns + 56'000;
     burst.update(smp);
     const double t = s.samples[k].t_host_ns * 1e-9;
-    if (clean_ref_s < 0 && clean.mag_has_reference()) clean_ref_s = t;
-    if (burst_ref_s < 0 && burst.mag_has_reference()) burst_ref_s = t;
+    if (clean_ref_s < 0 && clean.output().flags.mag_reference) clean_ref_s = t;
+    if (burst_ref_s < 0 && burst.output().flags.mag_reference) burst_ref_s = t;
   }
   ASSERT_GT(clean_ref_s, 0);
   ASSERT_GT(burst_ref_s, 0) << "the reference field was never accepted after the burst";
   EXPECT_LT(burst_ref_s, clean_ref_s + 1.0);
-  EXPECT_LT(std::abs(heading_err_deg(burst.q_earth_sensor(), s.truth.back())), 1.5);
+  EXPECT_LT(std::abs(heading_err_deg(burst.output().q_earth_sensor, s.truth.back())), 1.5);
 }
 
 }  // namespace

@@ -18,11 +18,12 @@ RunResult run(const SynthStream& s, double t_settle_s, const FilterParams& p = {
   RunResult r{0, 0, 0, AttitudeFilter(p)};
   for (size_t i = 0; i < s.samples.size(); ++i) {
     r.filter.update(s.samples[i]);
-    const Eigen::Quaterniond q = r.filter.q_earth_sensor();
+    const Eigen::Quaterniond q = r.filter.output().q_earth_sensor;
     EXPECT_TRUE(q.coeffs().allFinite());
     if (s.samples[i].t_host_ns * 1e-9 < t_settle_s) continue;
     r.max_err_deg = std::max(r.max_err_deg, angle_deg(q, s.truth[i]));
-    r.max_tilt_deg = std::max(r.max_tilt_deg, tilt_deg(r.filter.q_earth_sensor_6d(), s.truth[i]));
+    r.max_tilt_deg =
+        std::max(r.max_tilt_deg, tilt_deg(r.filter.output().q_earth_sensor_6d, s.truth[i]));
     r.final_err_deg = angle_deg(q, s.truth[i]);
   }
   return r;
@@ -41,8 +42,8 @@ TEST(AttitudeSynthetic, StaticConvergesFastIncludingHeading) {
   const auto s = make_stream(c);
   const RunResult r = run(s, 2.0);
   EXPECT_LT(r.max_err_deg, 1.0);
-  EXPECT_TRUE(r.filter.at_rest());
-  EXPECT_FALSE(r.filter.mag_disturbed());
+  EXPECT_TRUE(r.filter.output().flags.at_rest);
+  EXPECT_FALSE(r.filter.output().flags.mag_disturbed);
 }
 
 class ConstantRotation : public ::testing::TestWithParam<int> {};
@@ -70,7 +71,7 @@ TEST(AttitudeSynthetic, EstimatesGyroBiasAtRestAndDuringMotion) {
   c.duration_s = 120;
   c.gyr_bias = Eigen::Vector3d(0.5, -0.3, 0.4) * kDeg;
   const auto rest = run(make_stream(c), 5.0);
-  EXPECT_LT((rest.filter.gyro_bias_rad_s() - c.gyr_bias).norm() / kDeg, 0.05);
+  EXPECT_LT((rest.filter.output().gyro_bias_rad_s - c.gyr_bias).norm() / kDeg, 0.05);
   EXPECT_LT(rest.max_err_deg, 2.0);
   // Slow continuous motion from the start: the motion update estimates horizontal bias.
   c.gyr_true = [](double t) -> Eigen::Vector3d {
@@ -122,10 +123,10 @@ TEST(AttitudeSynthetic, MagnetPassingByIsRejected) {
   for (size_t i = 0; i < s.samples.size(); ++i) {
     f.update(s.samples[i]);
     const double t = s.samples[i].t_host_ns * 1e-9;
-    if (t > 31 && t < 33) flagged |= f.mag_disturbed();
+    if (t > 31 && t < 33) flagged |= f.output().flags.mag_disturbed;
     if (t > 10) {
-      max_err = std::max(max_err, angle_deg(f.q_earth_sensor(), s.truth[i]));
-      max_tilt = std::max(max_tilt, tilt_deg(f.q_earth_sensor(), s.truth[i]));
+      max_err = std::max(max_err, angle_deg(f.output().q_earth_sensor, s.truth[i]));
+      max_tilt = std::max(max_tilt, tilt_deg(f.output().q_earth_sensor, s.truth[i]));
     }
   }
   EXPECT_TRUE(flagged);
@@ -151,9 +152,9 @@ TEST(AttitudeSynthetic, StepInFieldIsRejectedThenAccepted) {
   for (size_t i = 0; i < s.samples.size(); ++i) {
     f.update(s.samples[i]);
     const double t = s.samples[i].t_host_ns * 1e-9;
-    if (t > 31 && t < 35) flagged |= f.mag_disturbed();
-    if (t > 110) accepted_again |= !f.mag_disturbed();
-    if (t > 10) max_err = std::max(max_err, angle_deg(f.q_earth_sensor(), s.truth[i]));
+    if (t > 31 && t < 35) flagged |= f.output().flags.mag_disturbed;
+    if (t > 110) accepted_again |= !f.output().flags.mag_disturbed;
+    if (t > 10) max_err = std::max(max_err, angle_deg(f.output().q_earth_sensor, s.truth[i]));
   }
   EXPECT_TRUE(flagged);
   EXPECT_TRUE(accepted_again);
@@ -230,8 +231,8 @@ TEST(AttitudeSynthetic, SavedStateReproducesOutput) {
     a.update(s.samples[i]);
     b.update(s.samples[i]);
   }
-  EXPECT_LT(a.q_earth_sensor().angularDistance(b.q_earth_sensor()), 1e-12);
-  EXPECT_EQ(a.gyro_bias_rad_s(), b.gyro_bias_rad_s());
+  EXPECT_LT(a.output().q_earth_sensor.angularDistance(b.output().q_earth_sensor), 1e-12);
+  EXPECT_EQ(a.output().gyro_bias_rad_s, b.output().gyro_bias_rad_s);
 }
 
 TEST(AttitudeSynthetic, SixDimensionalOutputBeforeMagnetometer) {
@@ -244,8 +245,8 @@ TEST(AttitudeSynthetic, SixDimensionalOutputBeforeMagnetometer) {
     smp.valid &= static_cast<uint8_t>(~kFieldMag);
     f.update(smp);
   }
-  EXPECT_LT(tilt_deg(f.q_earth_sensor(), s.truth.back()), 0.5);
-  EXPECT_GT(f.heading_sigma_rad(), 1.0);  // heading unknown without a magnetometer
+  EXPECT_LT(tilt_deg(f.output().q_earth_sensor, s.truth.back()), 0.5);
+  EXPECT_GT(f.output().heading_sigma_rad, 1.0);  // heading unknown without a magnetometer
 }
 
 }  // namespace

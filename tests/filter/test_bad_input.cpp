@@ -61,11 +61,11 @@ TEST(BadInput, RejectedCountedAndNeverNaN) {
     ImuSample smp = s.samples[i];
     if (i % 5 == 0) corrupt(smp, i / 5);
     f.update(smp);
-    ASSERT_TRUE(f.q_earth_sensor().coeffs().allFinite()) << i;
-    ASSERT_TRUE(f.q_earth_sensor_6d().coeffs().allFinite()) << i;
-    ASSERT_TRUE(f.gyro_bias_rad_s().allFinite()) << i;
-    ASSERT_TRUE(std::isfinite(f.heading_sigma_rad()));
-    if (i > 500) max_err = std::max(max_err, angle_deg(f.q_earth_sensor(), s.truth[i]));
+    ASSERT_TRUE(f.output().q_earth_sensor.coeffs().allFinite()) << i;
+    ASSERT_TRUE(f.output().q_earth_sensor_6d.coeffs().allFinite()) << i;
+    ASSERT_TRUE(f.output().gyro_bias_rad_s.allFinite()) << i;
+    ASSERT_TRUE(std::isfinite(f.output().heading_sigma_rad));
+    if (i > 500) max_err = std::max(max_err, angle_deg(f.output().q_earth_sensor, s.truth[i]));
   }
   const auto& c = f.counters();
   EXPECT_GT(c.nonfinite, 0u);
@@ -83,7 +83,7 @@ TEST(BadInput, TimestampGoingBackwardsIsRejected) {
   f.update(old);
   EXPECT_GT(f.counters().bad_time, 0u);
   f.update(s.samples[300]);
-  EXPECT_LT(angle_deg(f.q_earth_sensor(), s.truth[300]), 2.0);
+  EXPECT_LT(angle_deg(f.output().q_earth_sensor, s.truth[300]), 2.0);
 }
 
 TEST(BadInput, OnlyGarbageKeepsIdentityAndFinite) {
@@ -95,7 +95,7 @@ TEST(BadInput, OnlyGarbageKeepsIdentityAndFinite) {
     s.t_host_ns = i * 10'000'000;
     f.update(s);
   }
-  EXPECT_TRUE(f.q_earth_sensor().coeffs().allFinite());
+  EXPECT_TRUE(f.output().q_earth_sensor.coeffs().allFinite());
   EXPECT_EQ(f.counters().gyr_ok, 0u);
   EXPECT_EQ(f.counters().acc_ok, 0u);  // zero acc and mag
   EXPECT_EQ(f.counters().zero_vector, 200u);

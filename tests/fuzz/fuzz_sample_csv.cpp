@@ -33,7 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       samples.push_back(s);
     }
   }
-  const mocap::filt::GyroScaleResult g = mocap::filt::estimate_gyro_scale(samples);
+  const mocap::GyroScaleResult g = mocap::estimate_gyro_scale(samples);
   for (const auto& a : g.axis)
     if (!std::isfinite(a.scale) || a.scale <= 0) std::abort();
   return 0;

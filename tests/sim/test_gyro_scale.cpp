@@ -1,4 +1,4 @@
-// Gyro scale calibration (filt::estimate_gyro_scale) on the virtual sensor's table spins
+// Gyro scale calibration (estimate_gyro_scale) on the virtual sensor's table spins
 // (sim::table_spin_samples): each axis's drawn scale error is recovered, with the bias, noise
 // and hard-iron offset of the consumer-MEMS model, also when the sensor is put back turned
 // (the magnetometer gives the net turn); motions that are not a clean spin are rejected.
@@ -15,7 +15,7 @@ TEST(GyroScale, TableSpinsRecoverEveryAxisScale) {
   for (uint64_t seed = 1; seed <= 5; ++seed) {
     SensorErrorModel model(SensorModelParams{}, 100, seed);
     const auto samples = table_spin_samples(model, MagneticFieldParams{}, 100);
-    const filt::GyroScaleResult r = filt::estimate_gyro_scale(samples);
+    const GyroScaleResult r = estimate_gyro_scale(samples);
     for (int ax = 0; ax < 3; ++ax) {
       EXPECT_EQ(r.axis[ax].spins, 1) << "seed " << seed << " axis " << ax;
       // Drawn errors are ~0.5 % (1 sigma); recovered to 0.05 %.
@@ -30,11 +30,11 @@ TEST(GyroScale, PutBackTurnedTheMagnetometerGivesTheNetTurn) {
   SensorErrorModel model(SensorModelParams{}, 100, 7);
   // 3 turns and 25 deg: without the magnetometer that is read as 3 turns (0.8 % error).
   const auto samples = table_spin_samples(model, MagneticFieldParams{}, 100, 3, 25);
-  const filt::GyroScaleResult r = filt::estimate_gyro_scale(samples);
+  const GyroScaleResult r = estimate_gyro_scale(samples);
   std::vector<ImuSample> no_mag = samples;
   for (ImuSample& s : no_mag)
     s.valid &= ~kFieldMag;
-  const filt::GyroScaleResult blind = filt::estimate_gyro_scale(no_mag);
+  const GyroScaleResult blind = estimate_gyro_scale(no_mag);
   for (int ax = 0; ax < 3; ++ax) {
     EXPECT_NEAR(r.axis[ax].scale, model.gyr_scale()[ax], 1e-3) << "axis " << ax;
     EXPECT_GT(std::abs(blind.axis[ax].scale - model.gyr_scale()[ax]), 0.015) << "axis " << ax;
@@ -44,7 +44,7 @@ TEST(GyroScale, PutBackTurnedTheMagnetometerGivesTheNetTurn) {
 TEST(GyroScale, NoSpinsLeaveTheScaleAtOne) {
   SensorErrorModel model(SensorModelParams{}, 100, 3);
   auto samples = table_spin_samples(model, MagneticFieldParams{}, 100, 0, 180);  // half turns
-  const filt::GyroScaleResult r = filt::estimate_gyro_scale(samples);
+  const GyroScaleResult r = estimate_gyro_scale(samples);
   EXPECT_EQ(r.scale(), Eigen::Vector3d::Ones());
   EXPECT_EQ(r.rejected_spins, 5);
   EXPECT_EQ(r.rests, 6);

@@ -1,5 +1,5 @@
 // mocap gyro-scale: the one-time gyro scale calibration of each sensor from a recording of table
-// spins (filt::estimate_gyro_scale: each axis vertical in turn, whole turns, rests between) ->
+// spins (estimate_gyro_scale: each axis vertical in turn, whole turns, rests between) ->
 // the `gyr_scale = [x, y, z]` line of each sensor's [[sensor]] table.
 #include <cstdio>
 #include <cstring>
@@ -95,7 +95,7 @@ int run_gyro_scale(const std::string& path) {
   for (size_t i = 0; i < rec.samples.size(); ++i) {
     if (rec.samples[i].empty()) continue;
     const std::string& name = rec.names[i];
-    const filt::GyroScaleResult r = filt::estimate_gyro_scale(rec.samples[i]);
+    const GyroScaleResult r = estimate_gyro_scale(rec.samples[i]);
     std::printf("# %s: %d rests, spins about x/y/z %d/%d/%d, %d motions not a clean spin\n",
                 name.c_str(), r.rests, r.axis[0].spins, r.axis[1].spins, r.axis[2].spins,
                 r.rejected_spins);

@@ -21,7 +21,7 @@
 
 #include "mocap/core/imu_sample.hpp"
 
-namespace mocap::filt {
+namespace mocap {
 
 struct GyroScaleOptions {
   double still_deg_s = 5.0;        ///< |gyro| below this counts as still (bias included)
@@ -52,4 +52,4 @@ struct GyroScaleResult {
 GyroScaleResult estimate_gyro_scale(std::span<const ImuSample> samples,
                                     const GyroScaleOptions& options = {});
 
-}  // namespace mocap::filt
+}  // namespace mocap

@@ -4,12 +4,12 @@
 // the earth part turns with the sensor, b does not, so rotation separates them without a
 // sphere fit. A 6-state Kalman filter (c, b) with random-walk forgetting; its covariance
 // says, per direction, how well b is known, and only well-known directions are used. Plain
-// data (part of FilterState).
+// data (part of FilterState's HardIronState).
 #pragma once
 
 #include <Eigen/Core>
 
-namespace mocap::filt {
+namespace mocap {
 
 /// Noise and gates, all relative to the field norm F and per second (rate-independent).
 struct HardIronCoeffs {
@@ -36,6 +36,7 @@ struct HardIronEstimator {
   /// Gated as used_uT but with the significance threshold min_sigmas_consistent (what the
   /// filter subtracts while the estimator's innovations have stayed consistent).
   Eigen::Vector3d used_consistent_uT = Eigen::Vector3d::Zero();
+  double offset_sigma_uT = 0;  ///< largest one-sigma of b over all directions (each step)
   bool init = false;
   int restarts = 0;
 
@@ -44,12 +45,12 @@ struct HardIronEstimator {
   /// refer to, 0 while unknown (then the first field's norm).
   void step(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es, double dt_s, double f_ref_uT,
             const HardIronCoeffs& k);
-  /// Largest one-sigma of b over all directions, uT.
-  double offset_sigma_uT() const;
 
  private:
+  void update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es, double dt_s,
+              const HardIronCoeffs& k);
   void restart(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es, const HardIronCoeffs& k);
   void gate(const HardIronCoeffs& k);
 };
 
-}  // namespace mocap::filt
+}  // namespace mocap

@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <cmath>
 
-namespace mocap::filt {
+namespace mocap {
 
 /// True when v is finite and min_norm < |v| <= max_norm. Otherwise increments the matching
 /// counter of `c` (any struct with nonfinite, zero_vector and out_of_range members).
@@ -27,4 +27,4 @@ bool check_vector(const Eigen::Vector3d& v, double min_norm, double max_norm, Co
   return true;
 }
 
-}  // namespace mocap::filt
+}  // namespace mocap

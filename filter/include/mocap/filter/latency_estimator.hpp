@@ -9,7 +9,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace mocap::filt {
+namespace mocap {
 
 /// Least squares of the high-passed x on the high-passed v (both normalised by |x|),
 /// exponentially weighted. latency_s() shrinks towards 0 while the rotation excitation
@@ -45,4 +45,4 @@ struct LatencyEstimator {
   }
 };
 
-}  // namespace mocap::filt
+}  // namespace mocap

@@ -7,7 +7,7 @@
 #include <numbers>
 #include "mocap/core/units.hpp"
 
-namespace mocap::filt {
+namespace mocap {
 
 /// Biquad coefficients (direct form II transposed). Pass-through when tau <= 0 or the cut-off
 /// is too close to Nyquist to be realised.
@@ -83,4 +83,4 @@ struct Lowpass {
   }
 };
 
-}  // namespace mocap::filt
+}  // namespace mocap

@@ -134,7 +134,11 @@ class BodyTracker {
   /// how far it has been turned so far, rad.
   std::array<bool, kSegmentCount> refine_{};
   std::array<double, kSegmentCount> turned_rad_{};
-  void feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q);
+  /// q_earth_sensor(i) and sensor_health(i) from the filter's output o.
+  Eigen::Quaterniond q_earth_sensor(int i, const FilterOutput& o) const;
+  SensorHealth sensor_health(int i, const FilterOutput& o) const;
+  void feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q,
+                                const Eigen::Vector3d& gyro_bias_rad_s);
   void start_heading_from_motion(const CalibrationResult& r);
   void apply_heading_from_motion(int64_t t_ns);
 };

@@ -43,7 +43,7 @@ struct AccuracyOptions {
   /// The sensors run for 22 s of walking and turning before the calibration stand
   /// (make_motion("warmup+...")), as when a person puts them on and walks in.
   bool warmup = false;
-  /// Each sensor's gyro scale calibrated first (filt::estimate_gyro_scale on the sensor's table
+  /// Each sensor's gyro scale calibrated first (estimate_gyro_scale on the sensor's table
   /// spins, table_spin.hpp, as a user does once per sensor; `[[sensor]] gyr_scale` in the
   /// daemon) and divided out of its samples. Off: the gyros' drawn scale errors stay.
   bool gyro_scale_calibration = false;

@@ -1,4 +1,4 @@
-// The gyro scale calibration as a user performs it (filt::estimate_gyro_scale): the sensor on a
+// The gyro scale calibration as a user performs it (estimate_gyro_scale): the sensor on a
 // table, each of its axes vertical in turn, spun whole turns with rests between, measured by a
 // virtual sensor's error model.
 #pragma once

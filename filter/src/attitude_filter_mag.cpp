@@ -1,0 +1,269 @@
+// AttitudeFilter's magnetometer stages, one function each (update_mag calls them in order):
+// hard-iron estimate and selection, the field into the 6D frame with latency compensation,
+// disturbance tests and reference field, Kalman heading with rejection and start-up rules.
+// Equations in docs/filter.md.
+#include "mocap/filter/attitude_filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "mocap/core/units.hpp"
+
+namespace mocap {
+namespace {
+
+double wrap_pi(double a) {
+  if (a > std::numbers::pi) a -= 2 * std::numbers::pi;
+  if (a < -std::numbers::pi) a += 2 * std::numbers::pi;
+  if (!(std::abs(a) <= std::numbers::pi)) a = std::remainder(a, 2 * std::numbers::pi);
+  return a;
+}
+
+/// Dip of an earth-frame field of norm n (rad, positive when the field points down).
+double dip_rad(const Eigen::Vector3d& m_e, double n) {
+  return -std::asin(std::clamp(m_e.z() / n, -1.0, 1.0));
+}
+
+Eigen::Quaterniond heading_quat(double delta_rad) {
+  return Eigen::Quaterniond(std::cos(delta_rad / 2), 0, 0, std::sin(delta_rad / 2));
+}
+
+}  // namespace
+
+double AttitudeFilter::field_deviation2(double norm, double dip, double ref_norm,
+                                        double ref_dip) const {
+  const double dn = (norm - ref_norm) / (p_.mag_dist.norm_th * ref_norm);
+  const double dd = (dip - ref_dip) / (p_.mag_dist.dip_th_deg * kRadPerDeg);
+  return dn * dn + dd * dd;
+}
+
+double AttitudeFilter::mag_latency_s() const {
+  return p_.mag_latency.tau_s > 0
+             ? st_.mag_latency.latency_s(p_.mag_latency.min_rate_deg_s * kRadPerDeg,
+                                         p_.mag_latency.max_s)
+             : 0.0;
+}
+
+// A field sample: hard iron, into the 6D frame (latency-compensated), disturbance tests,
+// heading.
+void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
+  const Eigen::Quaterniond q6 = st_.inclination.q_acc * st_.strapdown.q_gyr;
+  if (p_.hard_iron.tau_s > 0) update_hard_iron(mag_raw, q6, dt_s);
+  const Eigen::Vector3d m_e = mag_to_earth(mag_raw - st_.hard_iron.applied_uT, q6);
+  if (p_.mag_dist.rejection) update_mag_disturbance(m_e);
+  update_heading(m_e, dt_s);
+}
+
+// Hard-iron estimator (decimated to hard_iron.step_s), fed with the latency-compensated raw
+// field; then the choice of the offset subtracted.
+void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag_raw, const Eigen::Quaterniond& q6,
+                                      double dt_s) {
+  HardIronState& h = st_.hard_iron;
+  h.dt_s += dt_s > 0 ? dt_s : c_.ts.mag_s;
+  if (++h.n < c_.hard_iron.decim) return;
+  const double lat_s = mag_latency_s();
+  const Eigen::Vector3d w = st_.strapdown.last_gyr_rad_s - st_.bias.rad_s;
+  const Eigen::Vector3d m_c = mag_raw - lat_s * w.cross(mag_raw - h.est.used_uT);
+  const Eigen::Matrix3d r6 = q6.toRotationMatrix();
+  h.est.step(m_c, r6, std::min(h.dt_s, 1.0), st_.mag_dist.ref_norm, c_.hard_iron.est);
+  h.n = 0;
+  h.dt_s = 0;
+  select_hard_iron(r6 * m_c, r6 * (m_c - h.est.used_uT));
+}
+
+// Applies the gated offset only while it explains a disturbance: the squared norm/dip
+// deviations from the reference (relative to the thresholds) without and with it; or, with a
+// lower significance, while the estimator's innovations have stayed consistent.
+void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
+                                      const Eigen::Vector3d& m_corr_e) {
+  HardIronState& hs = st_.hard_iron;
+  const HardIronEstimator& h = hs.est;
+  const double ref_norm = st_.mag_dist.ref_norm;
+  bool consistent = false;
+  if (p_.hard_iron.consistent_nis > 0) {
+    if (h.restarts != hs.restarts_seen || !(h.nis < p_.hard_iron.consistent_nis))
+      hs.consistent_s = 0;
+    else
+      hs.consistent_s += c_.hard_iron.decim * c_.ts.mag_s;
+    hs.restarts_seen = h.restarts;
+    consistent = ref_norm > 0 && hs.consistent_s >= p_.hard_iron.consistent_s;
+  }
+  if (p_.hard_iron.select_margin <= 0) {
+    hs.weight = 1;
+  } else if (ref_norm <= 0 || h.used_uT.isZero()) {
+    // Nothing to compare with before a reference field exists (a field that varies around
+    // a magnet at start-up must not be "explained" by an offset), or nothing to apply.
+    hs.select = 0;
+    hs.weight = 0;
+  } else {
+    auto score = [&](const Eigen::Vector3d& m) {
+      const double n = m.norm();
+      if (!(n > 0)) return 0.0;
+      return std::min(field_deviation2(n, dip_rad(m, n), ref_norm, st_.mag_dist.ref_dip), 25.0);
+    };
+    hs.select += c_.hard_iron.k_select * (score(m_raw_e) - score(m_corr_e) - hs.select);
+    hs.weight = std::clamp(hs.select / p_.hard_iron.select_margin, 0.0, 1.0);
+  }
+  hs.applied_uT = hs.weight * h.used_uT;
+  hs.applied_consistent = false;
+  if (consistent && h.used_consistent_uT.norm() > hs.applied_uT.norm()) {
+    hs.applied_uT = h.used_consistent_uT;
+    hs.applied_consistent = true;
+  }
+}
+
+// Into the 6D earth frame, compensated for the latency behind the gyro: a field read L late
+// is the current one rotated by w L, so v = q6 (w x m) is its rate of change there.
+Eigen::Vector3d AttitudeFilter::mag_to_earth(const Eigen::Vector3d& mag,
+                                             const Eigen::Quaterniond& q6) {
+  Eigen::Vector3d m_e = q6 * mag;
+  if (p_.mag_latency.tau_s > 0) {
+    const Eigen::Vector3d v_e = q6 * (st_.strapdown.last_gyr_rad_s - st_.bias.rad_s).cross(mag);
+    st_.mag_latency.step(m_e, v_e, c_.mag_latency.k_hp, c_.mag_latency.k);
+    m_e -= mag_latency_s() * v_e;
+  }
+  return m_e;
+}
+
+// Disturbance tests: the smoothed norm and dip against the reference (tracked while
+// undisturbed), and a candidate for a new reference (self-consistent while rotating).
+void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
+  MagDisturbanceState& d = st_.mag_dist;
+  const MagDisturbanceParams& p = p_.mag_dist;
+  const double ts = c_.ts.mag_s;
+  const double n = m_e.norm();
+  const double nd[2] = {n, dip_rad(m_e, n)};
+  const auto& f = d.norm_dip_lp.step(nd, c_.mag_dist.norm_dip_lp, p.current_tau_s, ts);
+  d.norm_dip[0] = f[0];
+  d.norm_dip[1] = f[1];
+  const double norm = f[0], dip = f[1];
+  const double dip_th = p.dip_th_deg * kRadPerDeg;
+  if (std::abs(norm - d.ref_norm) < p.norm_th * d.ref_norm && std::abs(dip - d.ref_dip) < dip_th) {
+    d.undisturbed_t_s += ts;
+    if (d.undisturbed_t_s >= p.min_undisturbed_time_s) {
+      d.disturbed = false;
+      d.ref_norm += c_.mag_dist.k_ref * (norm - d.ref_norm);
+      d.ref_dip += c_.mag_dist.k_ref * (dip - d.ref_dip);
+    }
+  } else {
+    d.undisturbed_t_s = 0;
+    d.disturbed = true;
+  }
+  if (std::abs(norm - d.cand_norm) < p.norm_th * d.cand_norm &&
+      std::abs(dip - d.cand_dip) < dip_th) {
+    // A new field replacing a known one must be seen while rotating (a static local
+    // disturbance stays self-consistent at rest); the very first field needs no rotation.
+    if (d.ref_norm == 0 || st_.rest.last_gyr_lp.norm() >= p.new_min_gyr_deg_s * kRadPerDeg)
+      d.cand_t_s += ts;
+    d.cand_age_s += ts;
+    d.cand_norm += c_.mag_dist.k_ref * (norm - d.cand_norm);
+    d.cand_dip += c_.mag_dist.k_ref * (dip - d.cand_dip);
+    if (d.disturbed &&
+        (d.cand_t_s >= p.new_time_s || (d.ref_norm == 0 && d.cand_t_s >= p.new_first_time_s))) {
+      if (!d.have_ref) end_mag_startup();
+      d.ref_norm = d.cand_norm;
+      d.ref_dip = d.cand_dip;
+      d.disturbed = false;
+      d.undisturbed_t_s = p.min_undisturbed_time_s;
+    }
+  } else {
+    d.cand_t_s = 0;
+    d.cand_age_s = 0;
+    d.cand_norm = norm;
+    d.cand_dip = dip;
+  }
+}
+
+// Kalman heading. Predict: the heading drifts by the nominal process noise plus what the
+// gyro-bias uncertainty allows. Update with the field's heading in the 6D frame, at the gain
+// the rejection and start-up rules leave; Joseph form (valid for those gains as well).
+void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double dt_s) {
+  HeadingState& h = st_.heading;
+  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - h.delta_rad);
+  const double sb2 = st_.bias.p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
+  h.delta_var_rad2 += (c_.heading.q_rad2_s + sb2) * (dt_s > 0 ? dt_s : c_.ts.mag_s);  // real gap
+  const double r = heading_measurement_var();
+  const double k = heading_gain(h.delta_var_rad2 / (h.delta_var_rad2 + r));
+  h.delta_rad = wrap_pi(h.delta_rad + k * err);
+  h.delta_var_rad2 = (1 - k) * (1 - k) * h.delta_var_rad2 + k * k * r;
+  h.q_delta = heading_quat(h.delta_rad);
+}
+
+// Nominal (steady state = tau_mag), inflated by the squared disturbance indicators, each
+// relative to its threshold, and by the rejection time not yet repaid.
+double AttitudeFilter::heading_measurement_var() const {
+  const MagDisturbanceState& d = st_.mag_dist;
+  double r = c_.heading.r0_rad2;
+  if (p_.mag_dist.rejection && (d.ref_norm > 0 || d.cand_norm > 0)) {
+    // Deviations from the reference, or before one exists from the candidate.
+    const bool ref = d.ref_norm > 0;
+    const double rn = ref ? d.ref_norm : d.cand_norm;
+    const double rd = ref ? d.ref_dip : d.cand_dip;
+    double score =
+        p_.mag_dist.trust_weight * field_deviation2(d.norm_dip[0], d.norm_dip[1], rn, rd);
+    score += d.reject_t_s / p_.heading.tau_mag_s;
+    r *= 1.0 + score;
+  }
+  return r;
+}
+
+// Rejection: K = 0 while disturbed for up to max_rejection_time_s, then at most the nominal
+// gain / rejection_factor. Start-up: the provisional heading follows the field only while it
+// stays consistent with the candidate reference (a field whose norm or dip changes is no earth
+// field; the very first sample sets it); K >= k_init (1/N over tau_mag_s), counting only
+// samples that pass the tests.
+double AttitudeFilter::heading_gain(double k) {
+  const double ts = c_.ts.mag_s;
+  MagDisturbanceState& d = st_.mag_dist;
+  HeadingState& h = st_.heading;
+  bool use_init = true;
+  if (p_.mag_dist.rejection) {
+    if (!d.have_ref) {
+      use_init = false;
+      if (!h.set)
+        k = 1;
+      else if (d.cand_age_s < p_.mag_dist.min_undisturbed_time_s)
+        k = 0;
+      h.set = true;
+    } else if (d.disturbed) {
+      use_init = false;
+      if (d.reject_t_s <= p_.mag_dist.max_rejection_time_s) {
+        d.reject_t_s += ts;
+        k = 0;
+      } else {
+        k = std::min(k, c_.heading.k_mag) /
+            p_.mag_dist.rejection_factor;  // backstop: nominal gain at most
+      }
+    } else {
+      d.reject_t_s = std::max(d.reject_t_s - p_.mag_dist.rejection_factor * ts, 0.0);
+    }
+  }
+  if (h.k_init != 0 && use_init) {
+    k = std::max(k, h.k_init);
+    h.k_init = h.k_init / (h.k_init + 1);
+    if (h.k_init * p_.heading.tau_mag_s < ts) h.k_init = 0;
+  }
+  return k;
+}
+
+// End of start-up (a first reference field accepted): converge afresh on samples that pass the
+// tests from now on. The schedule restarts at the gain the heading variance implies (1 after a
+// full reset, about the Kalman gain when the provisional heading is kept).
+void AttitudeFilter::end_mag_startup() {
+  st_.mag_dist.have_ref = true;
+  st_.heading.k_init =
+      st_.heading.delta_var_rad2 / (st_.heading.delta_var_rad2 + c_.heading.r0_rad2);
+}
+
+// Predicted to the newest gyro sample (the magnetometer may be slower or missing).
+double AttitudeFilter::heading_sigma_rad() const {
+  if (!st_.mag_timing.have) return std::numbers::pi;
+  const double since_mag_s =
+      std::max(static_cast<double>(st_.gyr_timing.t_ns - st_.mag_timing.t_ns), 0.0) * 1e-9;
+  const double sb2 = st_.bias.p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
+  return std::sqrt(
+      std::max(st_.heading.delta_var_rad2 + (c_.heading.q_rad2_s + sb2) * since_mag_s, 0.0));
+}
+
+}  // namespace mocap
