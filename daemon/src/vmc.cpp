@@ -122,14 +122,13 @@ bool VmcSender::open(const Options& options, std::string* error) {
   options_ = options;
   if (!udp_.open(options.host, options.port, "VMC", error)) return false;
   bundle_cap_ = std::clamp<std::size_t>(options.max_datagram, 256, sizeof bundle_);
-  sent_any_ = false;
+  pacer_.reset();
   return true;
 }
 
 bool VmcSender::publish(const PoseFrame& frame) noexcept {
   if (!udp_.is_open()) return false;
-  if (sent_any_ && frame.t_ns - last_t_ns_ < int64_t{options_.min_interval_ms} * 1'000'000 &&
-      frame.t_ns >= last_t_ns_) {
+  if (!pacer_.due(frame.t_ns, options_.min_interval_ms)) {
     ++stats_.frames_rate_limited;
     return false;
   }
@@ -138,9 +137,8 @@ bool VmcSender::publish(const PoseFrame& frame) noexcept {
     ++stats_.frames_invalid;
     return false;
   }
-  if (!sent_any_) first_t_ns_ = frame.t_ns;
-  sent_any_ = true;
-  last_t_ns_ = frame.t_ns;
+  if (!pacer_.sent_any()) first_t_ns_ = frame.t_ns;
+  pacer_.sent(frame.t_ns);
 
   osc::BundleWriter bundle(bundle_, bundle_cap_);
   bundle.begin();

@@ -67,14 +67,13 @@ bool vrchat_tracker_from_frame(const PoseFrame& f, int s, double scale,
 bool VrchatSender::open(const Options& options, std::string* error) {
   options_ = options;
   if (!udp_.open(options.host, options.port, "VRChat", error)) return false;
-  sent_any_ = false;
+  pacer_.reset();
   return true;
 }
 
 bool VrchatSender::publish(const PoseFrame& frame) noexcept {
   if (!udp_.is_open()) return false;
-  if (sent_any_ && frame.t_ns - last_t_ns_ < int64_t{options_.min_interval_ms} * 1'000'000 &&
-      frame.t_ns >= last_t_ns_) {
+  if (!pacer_.due(frame.t_ns, options_.min_interval_ms)) {
     ++stats_.frames_rate_limited;
     return false;
   }
@@ -92,8 +91,7 @@ bool VrchatSender::publish(const PoseFrame& frame) noexcept {
     ++stats_.frames_invalid;
     return false;
   }
-  sent_any_ = true;
-  last_t_ns_ = frame.t_ns;
+  pacer_.sent(frame.t_ns);
 
   bool ok = true;
   auto send = [&](const char* address, const std::array<float, 3>& v) {

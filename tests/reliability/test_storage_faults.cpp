@@ -83,12 +83,6 @@ bool private_mounts(std::string& why) {
   return true;
 }
 
-bool both_streaming(Daemon& d) {
-  const auto st = d.status();
-  return sensor_status(st, "a").value("state", "") == "streaming" &&
-         sensor_status(st, "b").value("state", "") == "streaming";
-}
-
 }  // namespace
 
 TEST(StorageFaults, KillNineWhileRecordingAlwaysLeavesAReadableFile) {
