@@ -66,17 +66,11 @@ bool vrchat_tracker_from_frame(const PoseFrame& f, int s, double scale,
 
 bool VrchatSender::open(const Options& options, std::string* error) {
   options_ = options;
-  if (!udp_.open(options.host, options.port, "VRChat", error)) return false;
-  pacer_.reset();
-  return true;
+  return target_.open(options, "VRChat", error);
 }
 
 bool VrchatSender::publish(const PoseFrame& frame) noexcept {
-  if (!udp_.is_open()) return false;
-  if (!pacer_.due(frame.t_ns, options_.min_interval_ms)) {
-    ++stats_.frames_rate_limited;
-    return false;
-  }
+  if (!target_.due(frame.t_ns, stats_)) return false;
   std::array<VrchatTracker, kVrchatTrackerSlots> trackers;
   VrchatTracker head;
   for (int i = 0; i < kVrchatTrackerSlots; ++i) {
@@ -91,14 +85,14 @@ bool VrchatSender::publish(const PoseFrame& frame) noexcept {
     ++stats_.frames_invalid;
     return false;
   }
-  pacer_.sent(frame.t_ns);
+  target_.sent(frame.t_ns);
 
   bool ok = true;
   auto send = [&](const char* address, const std::array<float, 3>& v) {
     osc::MessageWriter m(message_, sizeof message_);
     m.address(address).tags(",fff").f32(v[0]).f32(v[1]).f32(v[2]);
     if (!m.ok()) return;
-    if (!udp_.send(message_, m.size())) {
+    if (!target_.send(message_, m.size())) {
       ++stats_.send_errors;
       ok = false;
     } else {

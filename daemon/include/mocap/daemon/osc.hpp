@@ -45,23 +45,39 @@ struct FrameStats {
   uint64_t send_errors = 0;          ///< sendto failures (e.g. EAGAIN); what it carried is lost
 };
 
-/// The senders' rate limit in frame time: a frame closer than the interval after the last one
-/// sent is not due; one whose time went back (a new replay) is.
-class FramePacer {
+/// What the OSC senders share at run time: the socket and the rate limit in frame time (a frame
+/// closer than min_interval_ms after the last one sent is not due; one whose time went back, a
+/// new replay, is).
+class FrameTarget {
  public:
-  void reset() noexcept { sent_any_ = false; }
-  bool due(int64_t t_ns, int min_interval_ms) const noexcept {
-    return !sent_any_ || t_ns < last_t_ns_ ||
-           t_ns - last_t_ns_ >= int64_t{min_interval_ms} * 1'000'000;
+  /// (Re)opens the socket for the options' host:port and restarts the rate limit. False with
+  /// "<who>: ..." in `error` for a bad address or socket.
+  template <uint16_t DefaultPort>
+  bool open(const SenderOptions<DefaultPort>& o, std::string_view who, std::string* error) {
+    min_interval_ns_ = int64_t{o.min_interval_ms} * 1'000'000;
+    sent_any_ = false;
+    return udp_.open(o.host, o.port, who, error);
   }
+  /// Whether a frame at t_ns goes out: not if the socket is not open, nor if it comes too soon
+  /// (counted in stats.frames_rate_limited).
+  bool due(int64_t t_ns, FrameStats& stats) noexcept {
+    if (!udp_.is_open()) return false;
+    if (!sent_any_ || t_ns < last_t_ns_ || t_ns - last_t_ns_ >= min_interval_ns_) return true;
+    ++stats.frames_rate_limited;
+    return false;
+  }
+  /// The frame at t_ns goes out (the next ones are limited from it).
   void sent(int64_t t_ns) noexcept {
     sent_any_ = true;
     last_t_ns_ = t_ns;
   }
   bool sent_any() const noexcept { return sent_any_; }
+  /// Sends one datagram without blocking; false if it was not sent (lost).
+  bool send(const void* data, std::size_t size) const noexcept { return udp_.send(data, size); }
 
  private:
-  int64_t last_t_ns_ = 0;
+  UdpTarget udp_;
+  int64_t min_interval_ns_ = 0, last_t_ns_ = 0;
   bool sent_any_ = false;
 };
 

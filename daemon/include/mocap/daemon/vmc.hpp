@@ -64,8 +64,7 @@ class VmcSender {
 
  private:
   Options options_;
-  osc::UdpTarget udp_;
-  osc::FramePacer pacer_;
+  osc::FrameTarget target_;
   int64_t first_t_ns_ = 0;
   uint8_t bundle_[1500];
   uint8_t message_[256];

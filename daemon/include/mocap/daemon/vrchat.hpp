@@ -65,8 +65,7 @@ class VrchatSender {
 
  private:
   Options options_;
-  osc::UdpTarget udp_;
-  osc::FramePacer pacer_;
+  osc::FrameTarget target_;
   uint8_t message_[128];
   Stats stats_;
 };
