@@ -283,12 +283,9 @@ TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
 // the same frames as it would uncompressed, and one flipped bit in the middle loses only the
 // compressed block holding it (reported, exit status 3).
 TEST(Recordings, ACompressedTakeExportsAndABitFlipLosesOnlyItsCompressedBlock) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  Daemon d(dir, "zstd",
-           base_config(dir, free_tcp_port(), "compression = \"zstd\"\n") + rig.sensors_toml());
-  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
-  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  TwoSensorDaemon setup("zstd", {}, "compression = \"zstd\"\n");
+  auto& [dir, rig, port, d] = setup;
+  ASSERT_TRUE(setup.ready_and_streaming()) << d.log_text();
   ASSERT_TRUE(d.call("record start take.mocapses").value("ok", false));
   std::this_thread::sleep_for(2000ms);
   const auto stop = d.call("record stop");
