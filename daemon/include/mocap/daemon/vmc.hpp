@@ -51,11 +51,8 @@ class VmcSender {
     std::size_t max_datagram_bytes = 0;
   };
 
-  VmcSender() = default;
-  VmcSender(const VmcSender&) = delete;
-  VmcSender& operator=(const VmcSender&) = delete;
-
-  /// Creates the UDP socket. False with a message if the address is invalid.
+  /// Creates the UDP socket to the VMC receiver (not copyable: it owns it). False with a message if
+  /// the address is invalid.
   bool open(const Options& options, std::string* error);
   /// Pipeline thread: encodes and sends one frame (non-blocking sendto, no allocation).
   /// Frame time (t_ns) drives the rate limit and /VMC/Ext/T.

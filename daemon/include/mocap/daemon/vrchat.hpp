@@ -52,11 +52,8 @@ class VrchatSender {
     uint64_t messages_sent = 0;  ///< one UDP datagram per OSC message
   };
 
-  VrchatSender() = default;
-  VrchatSender(const VrchatSender&) = delete;
-  VrchatSender& operator=(const VrchatSender&) = delete;
-
-  /// Creates the UDP socket. False with a message if the address is invalid.
+  /// Creates the UDP socket to VRChat (not copyable: it owns it). False with a message if
+  /// the address is invalid.
   bool open(const Options& options, std::string* error);
   /// Pipeline thread: encodes and sends one frame, each OSC message as its own datagram
   /// (non-blocking sendto, no allocation). The frame time drives the rate limit.
