@@ -1,6 +1,5 @@
 // Helpers for end-to-end tests that run the real programs: spawn with output to files, bounded
-// waits, whole-file reads, and a JSON pose-stream reader. (tests/e2e/test_mocapd.cpp keeps its
-// own copies of the same helpers; they can move here.)
+// waits, whole-file reads (run_program.hpp's slurp_file), and a JSON pose-stream reader.
 #pragma once
 
 #include <arpa/inet.h>

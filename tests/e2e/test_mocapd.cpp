@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "../common/e2e_process.hpp"
+#include "../common/free_port.hpp"
 #include "mocap/daemon/control.hpp"
 #include "mocap/session/session_reader.hpp"
 #include "mocap/skeleton/body_model.hpp"
@@ -58,15 +59,7 @@ int run(const std::vector<std::string>& argv, std::string* out = nullptr) {
 }
 
 uint16_t free_port() {
-  int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t n = sizeof a;
-  getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n);
-  close(fd);
-  return ntohs(a.sin_port);
+  return static_cast<uint16_t>(mocap::test::free_loopback_port(SOCK_STREAM));
 }
 
 }  // namespace
