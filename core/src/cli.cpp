@@ -95,13 +95,16 @@ CLI::Option* deprecate_alias(CLI::App& app, CLI::Option* alias, CLI::Option* can
   std::string who = app.get_name();  // "mocap replay"
   for (const CLI::App* p = app.get_parent(); p; p = p->get_parent())
     who = p->get_name() + " " + who;
+  // Not CLI11's excludes(): it names a hidden option as "" (an empty "Excludes:" in the
+  // canonical option's help, "--csv excludes " as the error). Option checks run after the whole
+  // command line is read, so the canonical option's count is known here.
   alias->description("deprecated spelling of " + instead)
       ->group("")
-      ->each([who, name, instead](const std::string&) {
+      ->each([who, name, instead, canonical](const std::string&) {
         std::fprintf(stderr, "%s: warning: %s is deprecated; use %s\n", who.c_str(), name.c_str(),
                      instead.c_str());
-      })
-      ->excludes(canonical);
+        if (canonical->count() > 0) throw CLI::ExcludesError(name, instead);
+      });
   alias->default_str("");
   return alias;
 }

@@ -6,32 +6,18 @@
 namespace mocap {
 
 std::string_view to_string(LogLevel l) {
-  switch (l) {
-    case LogLevel::trace:
-      return "trace";
-    case LogLevel::debug:
-      return "debug";
-    case LogLevel::info:
-      return "info";
-    case LogLevel::warn:
-      return "warn";
-    case LogLevel::error:
-      return "error";
-    case LogLevel::off:
-      return "off";
-  }
-  return "?";
+  const auto i = static_cast<std::size_t>(l);
+  return i < kLogLevelNames.size() ? kLogLevelNames[i] : "?";
 }
 
-bool parse_log_level(std::string_view s, LogLevel& out) {
-  for (LogLevel l : {LogLevel::trace, LogLevel::debug, LogLevel::info, LogLevel::warn,
-                     LogLevel::error, LogLevel::off}) {
-    if (s == to_string(l)) {
-      out = l;
-      return true;
-    }
-  }
-  return false;
+std::string_view log_level_choices() {
+  static const std::string choices = [] {
+    std::string s;
+    for (std::string_view n : kLogLevelNames)
+      s.append(s.empty() ? "" : ", ").append(n);
+    return s;
+  }();
+  return choices;
 }
 
 void LogSink::write(LogLevel level, std::string_view tag, std::string_view msg) {

@@ -52,17 +52,13 @@ std::vector<std::string_view> split_choices(std::string_view choices) {
   return out;
 }
 
-namespace {
-constexpr std::string_view kLogLevelChoices = "trace, debug, info, warn, error, off";
-}  // namespace
-
 template <>
 const Section<DaemonSection>& section() {
   using S = DaemonSection;
   static const Key<S> k[] = {
       {.name = "log_level",
        .at = AT(log_level),
-       .choices = kLogLevelChoices,
+       .choices = log_level_choices(),
        .help = "the daemon's log level (`--log-level` sets it too)"},
       {.name = "control_socket",
        .at = AT(control_socket),
@@ -471,7 +467,7 @@ const Section<SensorConfig>& section() {
                "(docs/devices.md \"Gyro scale calibration\"); samples are divided by it"},
       {.name = "log_level",
        .at = AT(log_level),
-       .choices = kLogLevelChoices,
+       .choices = log_level_choices(),
        .help = "this device's log level"},
       {.name = "options",
        .doc_type = "table",

@@ -120,34 +120,26 @@ bool vmc_pose_from_frame(const PoseFrame& f, VmcPose& out) noexcept {
 
 bool VmcSender::open(const Options& options, std::string* error) {
   options_ = options;
-  if (!udp_.open(options.host, options.port, "VMC", error)) return false;
   bundle_cap_ = std::clamp<std::size_t>(options.max_datagram, 256, sizeof bundle_);
-  sent_any_ = false;
-  return true;
+  return target_.open(options, "VMC", error);
 }
 
 bool VmcSender::publish(const PoseFrame& frame) noexcept {
-  if (!udp_.is_open()) return false;
-  if (sent_any_ && frame.t_ns - last_t_ns_ < int64_t{options_.min_interval_ms} * 1'000'000 &&
-      frame.t_ns >= last_t_ns_) {
-    ++stats_.frames_rate_limited;
-    return false;
-  }
+  if (!target_.due(frame.t_ns, stats_)) return false;
   VmcPose pose;
   if (!vmc_pose_from_frame(frame, pose)) {
     ++stats_.frames_invalid;
     return false;
   }
-  if (!sent_any_) first_t_ns_ = frame.t_ns;
-  sent_any_ = true;
-  last_t_ns_ = frame.t_ns;
+  if (!target_.sent_any()) first_t_ns_ = frame.t_ns;
+  target_.sent(frame.t_ns);
 
   osc::BundleWriter bundle(bundle_, bundle_cap_);
   bundle.begin();
   bool ok = true;
   auto send = [&] {
     if (bundle.empty()) return;
-    if (!udp_.send(bundle.data(), bundle.size())) {
+    if (!target_.send(bundle.data(), bundle.size())) {
       ++stats_.send_errors;
       ok = false;
     } else {

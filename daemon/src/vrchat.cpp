@@ -66,18 +66,11 @@ bool vrchat_tracker_from_frame(const PoseFrame& f, int s, double scale,
 
 bool VrchatSender::open(const Options& options, std::string* error) {
   options_ = options;
-  if (!udp_.open(options.host, options.port, "VRChat", error)) return false;
-  sent_any_ = false;
-  return true;
+  return target_.open(options, "VRChat", error);
 }
 
 bool VrchatSender::publish(const PoseFrame& frame) noexcept {
-  if (!udp_.is_open()) return false;
-  if (sent_any_ && frame.t_ns - last_t_ns_ < int64_t{options_.min_interval_ms} * 1'000'000 &&
-      frame.t_ns >= last_t_ns_) {
-    ++stats_.frames_rate_limited;
-    return false;
-  }
+  if (!target_.due(frame.t_ns, stats_)) return false;
   std::array<VrchatTracker, kVrchatTrackerSlots> trackers;
   VrchatTracker head;
   for (int i = 0; i < kVrchatTrackerSlots; ++i) {
@@ -92,15 +85,14 @@ bool VrchatSender::publish(const PoseFrame& frame) noexcept {
     ++stats_.frames_invalid;
     return false;
   }
-  sent_any_ = true;
-  last_t_ns_ = frame.t_ns;
+  target_.sent(frame.t_ns);
 
   bool ok = true;
   auto send = [&](const char* address, const std::array<float, 3>& v) {
     osc::MessageWriter m(message_, sizeof message_);
     m.address(address).tags(",fff").f32(v[0]).f32(v[1]).f32(v[2]);
     if (!m.ok()) return;
-    if (!udp_.send(message_, m.size())) {
+    if (!target_.send(message_, m.size())) {
       ++stats_.send_errors;
       ok = false;
     } else {

@@ -109,12 +109,10 @@ std::unique_ptr<ProtocolDecoder> make_joycon_decoder(const DeviceSpec& spec) {
 std::vector<SetupStep> joycon_setup(const DeviceSpec& spec) {
   std::vector<SetupStep> steps;
   auto step = [&](std::vector<uint8_t> bytes, int64_t reply, const char* what) {
-    SetupStep s;
-    s.bytes = std::move(bytes);
-    s.reply_id = reply;
-    s.timeout_ms = reply >= 0 ? 300 : 20;
-    s.what = what;
-    steps.push_back(std::move(s));
+    steps.push_back({.bytes = std::move(bytes),
+                     .reply_id = reply,
+                     .timeout_ms = reply >= 0 ? 300 : 20,
+                     .what = what});
   };
   if (option_string(spec, "usb_handshake", "1") == "1") {  // Pro Controller / Charging Grip on USB
     step({kUsbCmd, 0x02}, 0x102, "USB handshake");

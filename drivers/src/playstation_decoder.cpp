@@ -74,15 +74,13 @@ std::unique_ptr<ProtocolDecoder> make_playstation_decoder(const DeviceSpec& spec
 }
 
 std::vector<SetupStep> playstation_setup(const DeviceSpec& spec) {
-  SetupStep s;
-  s.kind = SetupStep::kGetFeature;
   const bool ds = spec.protocol == "dualsense";
-  s.bytes = {ds ? kCalibBt : kDs4CalibUsb};
-  s.feature_size = ds ? kCalib41Size : kDs4CalibUsbSize;
-  s.reply_id = 0xFE;  // counted by the decoder when the calibration parses
-  s.timeout_ms = 100;
-  s.what = "read calibration feature report";
-  return {s};
+  return {{.kind = SetupStep::kGetFeature,
+           .bytes = {ds ? kCalibBt : kDs4CalibUsb},
+           .feature_size = ds ? kCalib41Size : kDs4CalibUsbSize,
+           .reply_id = 0xFE,  // counted by the decoder when the calibration parses
+           .timeout_ms = 100,
+           .what = "read calibration feature report"}};
 }
 
 }  // namespace mocap

@@ -22,10 +22,9 @@
 #include "mocap/core/wakeup.hpp"
 #include "mocap/drivers/slimevr_listen.hpp"
 #include "slimevr_decoder.hpp"
+#include "udp_socket.hpp"
 
 namespace mocap {
-
-bool split_host_port(const std::string& hp, std::string& host, std::string& port, std::string& err);
 
 namespace {
 
@@ -33,34 +32,9 @@ constexpr int kTickMs = 100;
 constexpr int kRetryMs = 500;
 constexpr int64_t kHelloRecordNs = 250'000'000;  // boards' handshakes re-recorded this often
 
-/// A bound IPv4 UDP socket (broadcast-capable). Not SO_REUSEADDR: a second socket on the port
-/// would take unicast datagrams from the first, so a busy port is an error. -1 + err on failure.
+/// The server's socket: IPv4 (the trackers speak IPv4), broadcast-capable. -1 + err on failure.
 int bind_udp4(const std::string& host_port, std::string& err) {
-  std::string host, port;
-  if (!split_host_port(host_port, host, port, err)) return -1;
-  addrinfo hints{};
-  hints.ai_family = AF_INET;  // the trackers speak IPv4
-  hints.ai_socktype = SOCK_DGRAM;
-  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
-  addrinfo* res = nullptr;
-  const int rc = getaddrinfo(host.empty() ? nullptr : host.c_str(), port.c_str(), &hints, &res);
-  if (rc != 0) {
-    err = "udp " + host_port + ": " + gai_strerror(rc);
-    return -1;
-  }
-  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  const int one = 1;
-  if (fd >= 0) {
-    ::setsockopt(fd, SOL_SOCKET, SO_BROADCAST, &one, sizeof one);
-  }
-  if (fd < 0 || ::bind(fd, res->ai_addr, res->ai_addrlen) != 0) {
-    err = "udp " + host_port + ": cannot bind: " + std::strerror(errno);
-    if (fd >= 0) ::close(fd);
-    freeaddrinfo(res);
-    return -1;
-  }
-  freeaddrinfo(res);
-  return fd;
+  return bind_udp(host_port, /*ipv4_only=*/true, /*broadcast=*/true, err);
 }
 
 std::string udp_address(const DeviceSpec& spec) {

@@ -9,6 +9,7 @@
 
 #include "fd_wait.hpp"
 #include "mocap/drivers/transport.hpp"
+#include "udp_socket.hpp"
 
 namespace mocap {
 namespace {
@@ -56,27 +57,35 @@ bool split_host_port(const std::string& hp, std::string& host, std::string& port
   return true;
 }
 
-std::unique_ptr<ByteTransport> open_udp(const std::string& host_port, std::string& err) {
+int bind_udp(const std::string& host_port, bool ipv4_only, bool broadcast, std::string& err) {
   std::string host, port;
-  if (!split_host_port(host_port, host, port, err)) return nullptr;
+  if (!split_host_port(host_port, host, port, err)) return -1;
   addrinfo hints{};
-  hints.ai_family = AF_UNSPEC;
+  hints.ai_family = ipv4_only ? AF_INET : AF_UNSPEC;
   hints.ai_socktype = SOCK_DGRAM;
   hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
   addrinfo* res = nullptr;
   const int rc = getaddrinfo(host.empty() ? nullptr : host.c_str(), port.c_str(), &hints, &res);
   if (rc != 0) {
     err = "udp " + host_port + ": " + gai_strerror(rc);
-    return nullptr;
+    return -1;
   }
-  int fd = ::socket(res->ai_family, res->ai_socktype | SOCK_CLOEXEC, 0);
+  const int fd = ::socket(res->ai_family, res->ai_socktype | SOCK_CLOEXEC, 0);
+  const int one = 1;
+  if (fd >= 0 && broadcast) ::setsockopt(fd, SOL_SOCKET, SO_BROADCAST, &one, sizeof one);
   if (fd < 0 || ::bind(fd, res->ai_addr, res->ai_addrlen) != 0) {
     err = "udp " + host_port + ": cannot bind: " + std::strerror(errno);
     if (fd >= 0) ::close(fd);
     freeaddrinfo(res);
-    return nullptr;
+    return -1;
   }
   freeaddrinfo(res);
+  return fd;
+}
+
+std::unique_ptr<ByteTransport> open_udp(const std::string& host_port, std::string& err) {
+  const int fd = bind_udp(host_port, /*ipv4_only=*/false, /*broadcast=*/false, err);
+  if (fd < 0) return nullptr;
   return std::make_unique<UdpTransport>(fd, host_port);
 }
 

@@ -11,11 +11,8 @@ namespace mocap {
 std::vector<SetupStep> witmotion_setup(const DeviceSpec& spec) {
   using namespace witmotion;
   auto write = [](std::array<uint8_t, 5> cmd, const char* what) {
-    SetupStep s;
-    s.bytes.assign(cmd.begin(), cmd.end());
-    s.timeout_ms = 30;  // the vendor tools leave a short gap between commands
-    s.what = what;
-    return s;
+    // 30 ms: the vendor tools leave a short gap between commands.
+    return SetupStep{.bytes = {cmd.begin(), cmd.end()}, .timeout_ms = 30, .what = what};
   };
   std::vector<SetupStep> steps;
   if (option_string(spec, "configure", "1") == "0") return steps;

@@ -120,12 +120,9 @@ std::vector<SetupStep> xbus_setup(const DeviceSpec& spec) {
   std::vector<SetupStep> steps;
   if (option_string(spec, "configure", "1") == "0") return steps;
   auto msg = [](uint8_t mid, std::vector<uint8_t> payload, uint8_t reply, const char* what) {
-    SetupStep s;
+    // Five attempts: the device may be streaming and miss the first GoToConfig.
+    SetupStep s{.reply_id = reply, .timeout_ms = 300, .attempts = 5, .what = what};
     xbus::encode(mid, payload, s.bytes);
-    s.reply_id = reply;
-    s.timeout_ms = 300;
-    s.attempts = 5;  // the device may be streaming and miss the first GoToConfig
-    s.what = what;
     return s;
   };
   const uint16_t hz = static_cast<uint16_t>(spec.rate_hz > 0 ? spec.rate_hz : 100);

@@ -9,9 +9,10 @@
 namespace mocap {
 
 std::optional<FilterAlgorithm> parse_filter_algorithm(std::string_view name) {
-  if (name == "default" || name == "ours") return FilterAlgorithm::kDefault;
-  if (name == "madgwick") return FilterAlgorithm::kMadgwick;
-  if (name == "mahony") return FilterAlgorithm::kMahony;
+  if (name == "ours") return FilterAlgorithm::kDefault;
+  for (FilterAlgorithm a :
+       {FilterAlgorithm::kDefault, FilterAlgorithm::kMadgwick, FilterAlgorithm::kMahony})
+    if (name == filter_algorithm_name(a)) return a;
   return std::nullopt;
 }
 
@@ -59,13 +60,23 @@ void drive(F& f, const BroadTrial& trial, FilterMode mode, std::vector<Eigen::Qu
   }
 }
 
+/// A baseline (Madgwick, Mahony) with its default parameters, its magnetometer on in 9D.
+template <class Filter, class Params>
+void drive_baseline(const BroadTrial& trial, FilterMode mode,
+                    std::vector<Eigen::Quaterniond>& out) {
+  Params p;
+  p.use_mag = mode == FilterMode::k9d;
+  Filter f(p);
+  drive(f, trial, mode, out);
+}
+
 }  // namespace
 
 void run_trial(const BroadTrial& trial, FilterAlgorithm alg, FilterMode mode,
                const FilterParams& params, std::vector<Eigen::Quaterniond>& out) {
-  const bool mag = mode == FilterMode::k9d;
   switch (alg) {
     case FilterAlgorithm::kDefault: {
+      const bool mag = mode == FilterMode::k9d;
       AttitudeFilter f(params);
       out.resize(trial.size());
       for (size_t i = 0; i < trial.size(); ++i) {
@@ -75,20 +86,12 @@ void run_trial(const BroadTrial& trial, FilterAlgorithm alg, FilterMode mode,
       }
       return;
     }
-    case FilterAlgorithm::kMadgwick: {
-      MadgwickParams p;
-      p.use_mag = mag;
-      MadgwickFilter f(p);
-      drive(f, trial, mode, out);
+    case FilterAlgorithm::kMadgwick:
+      drive_baseline<MadgwickFilter, MadgwickParams>(trial, mode, out);
       return;
-    }
-    case FilterAlgorithm::kMahony: {
-      MahonyParams p;
-      p.use_mag = mag;
-      MahonyFilter f(p);
-      drive(f, trial, mode, out);
+    case FilterAlgorithm::kMahony:
+      drive_baseline<MahonyFilter, MahonyParams>(trial, mode, out);
       return;
-    }
   }
 }
 

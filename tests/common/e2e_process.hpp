@@ -1,6 +1,5 @@
 // Helpers for end-to-end tests that run the real programs: spawn with output to files, bounded
-// waits, whole-file reads, and a JSON pose-stream reader. (tests/e2e/test_mocapd.cpp keeps its
-// own copies of the same helpers; they can move here.)
+// waits, whole-file reads (run_program.hpp's slurp_file), and a JSON pose-stream reader.
 #pragma once
 
 #include <arpa/inet.h>
@@ -20,6 +19,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "run_program.hpp"
 
 extern char** environ;
 
@@ -60,18 +61,11 @@ inline int wait_exit(pid_t pid, int timeout_s = 30) {
   return -1;
 }
 
-inline std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 /// Runs argv to completion (120 s at most), its stdout into *out.
 inline int run_program(const std::vector<std::string>& argv, const std::string& out_file,
                        std::string* out = nullptr) {
   const int rc = wait_exit(spawn(argv, out_file), 120);
-  if (out) *out = slurp(out_file) + slurp(out_file + ".err");
+  if (out) *out = slurp_file(out_file) + slurp_file(out_file + ".err");
   return rc;
 }
 

@@ -22,8 +22,9 @@ struct Result {
   std::string out, err;
 };
 
+/// The whole file (empty if it cannot be read).
 inline std::string slurp_file(const std::string& path) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();

@@ -4,6 +4,7 @@
 
 #include <sched.h>
 #include <sys/mount.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
@@ -145,6 +146,20 @@ inline bool private_mounts(std::string& why) {
     return false;
   }
   return true;
+}
+
+/// "" if this process may mount test file systems (it is root, and has just been given its own
+/// mount namespace so the mounts vanish with it), else why not (the test skips).
+inline std::string test_mounts_unavailable() {
+  if (::geteuid() != 0) return "not root";
+  std::string why;
+  return private_mounts(why) ? "" : why;
+}
+
+/// Mounts a 64 KiB tmpfs on `dir` (flags: 0 or MS_RDONLY); "" or what failed.
+inline std::string mount_small_tmpfs(const std::string& dir, unsigned long flags = 0) {
+  if (::mount("tmpfs", dir.c_str(), "tmpfs", flags, "size=64k") == 0) return "";
+  return std::strerror(errno);
 }
 
 }  // namespace mocap::test

@@ -44,18 +44,33 @@ std::vector<SensorInfo> two_sensors() {
   return {{"pelvis", 0}, {"head", 3}};
 }
 
+/// A PipelineCore over two_sensors() (pelvis, head) at rate_hz, sensors stale after 100 ms,
+/// publishing into `sink`.
+struct TwoSensorCore {
+  explicit TwoSensorCore(double rate_hz) : core(config(rate_hz), {}, two_sensors(), eng) {
+    core.add_sink(&sink);
+  }
+  static PipelineConfig config(double rate_hz) {
+    PipelineConfig pc;
+    pc.rate_hz = rate_hz;
+    pc.stale_after_ms = 100;
+    return pc;
+  }
+  test::GyroEngine eng = [] {
+    test::GyroEngine e;
+    e.segment[0] = 0;
+    e.segment[1] = 3;
+    return e;
+  }();
+  PipelineCore core;
+  CollectSink sink;
+};
+
 }  // namespace
 
 TEST(PipelineCore, SampleClockPublishesAtRateWithHealth) {
-  test::GyroEngine eng;
-  eng.segment[0] = 0;
-  eng.segment[1] = 3;
-  PipelineConfig pc;
-  pc.rate_hz = 50;
-  pc.stale_after_ms = 100;
-  PipelineCore core(pc, CalibrationConfig{}, two_sensors(), eng);
-  CollectSink sink;
-  core.add_sink(&sink);
+  TwoSensorCore pipe(50);
+  auto& [eng, core, sink] = pipe;
   // 2 s of sensor 0 at 100 Hz turning at 1 rad/s; sensor 1 stops after 0.5 s.
   for (int k = 0; k <= 200; ++k) {
     const int64_t t = k * 10'000'000LL;
@@ -84,15 +99,8 @@ TEST(PipelineCore, SampleClockPublishesAtRateWithHealth) {
 // newest sample's, so exports have one frame per time; silent sensors still get frames (at the
 // clock's time) that report them stale.
 TEST(PipelineCore, EveryFrameHasItsOwnTime) {
-  test::GyroEngine eng;
-  eng.segment[0] = 0;
-  eng.segment[1] = 3;
-  PipelineConfig pc;
-  pc.rate_hz = 120;
-  pc.stale_after_ms = 100;
-  PipelineCore core(pc, CalibrationConfig{}, two_sensors(), eng);
-  CollectSink sink;
-  core.add_sink(&sink);
+  TwoSensorCore pipe(120);
+  auto& [eng, core, sink] = pipe;
   for (int k = 0; k <= 100; ++k) {  // 1 s of both sensors at 100 Hz
     const int64_t t = k * 10'000'000LL;
     core.advance_clock_to(t);

@@ -18,8 +18,6 @@
 
 using namespace mocap;
 using namespace mocap::test;
-using mocap::SessionReader;
-using mocap::SessionWriter;
 namespace ses = mocap::session;
 
 namespace {
@@ -404,12 +402,10 @@ TEST(Session, DevFullRefusesTheRecordingWithAClearError) {
 }
 
 TEST(Session, DiskFullMidRecordingStopsCleanlyAndKeepsEverythingBefore) {
-  std::string why;
-  if (::geteuid() != 0 || !private_mounts(why))
+  if (const std::string why = test_mounts_unavailable(); !why.empty())
     GTEST_SKIP() << "needs root and a private mount namespace for a 64 KiB tmpfs: " << why;
   TempDir dir;
-  ASSERT_EQ(::mount("tmpfs", dir.path().c_str(), "tmpfs", 0, "size=64k"), 0)
-      << std::strerror(errno);
+  ASSERT_EQ(mount_small_tmpfs(dir.path()), "");
   const std::string path = dir.file("full.mocap");
   std::atomic<int> callbacks{0};
   std::string message;
@@ -450,12 +446,10 @@ TEST(Session, DiskFullMidRecordingStopsCleanlyAndKeepsEverythingBefore) {
 }
 
 TEST(Session, ReadOnlyFileSystemRefusesTheRecordingWithAClearError) {
-  std::string why;
-  if (::geteuid() != 0 || !private_mounts(why))
+  if (const std::string why = test_mounts_unavailable(); !why.empty())
     GTEST_SKIP() << "needs root and a private mount namespace for a read-only tmpfs: " << why;
   TempDir dir;
-  ASSERT_EQ(::mount("tmpfs", dir.path().c_str(), "tmpfs", MS_RDONLY, "size=64k"), 0)
-      << std::strerror(errno);
+  ASSERT_EQ(mount_small_tmpfs(dir.path(), MS_RDONLY), "");
   std::string err;
   EXPECT_FALSE(SessionWriter::create(dir.file("ro.mocap"), make_header(), {}, &err));
   EXPECT_NE(err.find("Read-only file system"), std::string::npos) << err;

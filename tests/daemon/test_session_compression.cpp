@@ -232,12 +232,10 @@ TEST(SessionCompression, TheWallClockBesideTheMonotonicOneComesBackFromTheReader
 // A full disk while compressing: the recording stops with the error, and every compressed block
 // written before it reads back whole (the torn one cut off), frames in order from the first.
 TEST(SessionCompression, DiskFullMidRecordingKeepsEveryWholeCompressedBlock) {
-  std::string why;
-  if (::geteuid() != 0 || !private_mounts(why))
+  if (const std::string why = test_mounts_unavailable(); !why.empty())
     GTEST_SKIP() << "needs root and a private mount namespace for a 64 KiB tmpfs: " << why;
   TempDir dir;
-  ASSERT_EQ(::mount("tmpfs", dir.path().c_str(), "tmpfs", 0, "size=64k"), 0)
-      << std::strerror(errno);
+  ASSERT_EQ(mount_small_tmpfs(dir.path()), "");
   const std::string path = dir.file("full.mocapses");
   std::string err;
   auto w = SessionWriter::create(path, make_header(), zstd_options(), &err);

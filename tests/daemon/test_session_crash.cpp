@@ -16,8 +16,6 @@
 
 using namespace mocap;
 using namespace mocap::test;
-using mocap::SessionReader;
-using mocap::SessionWriter;
 namespace ses = mocap::session;
 
 namespace {

@@ -48,6 +48,17 @@ void record(const std::string& path, int frames) {
   ASSERT_TRUE(w->close());
 }
 
+/// A session of `poses` alone.
+void record_poses(const std::string& path, const session::SessionHeader& header,
+                  const std::vector<PoseFrame>& poses) {
+  std::string err;
+  auto w = SessionWriter::create(path, header, {}, &err);
+  ASSERT_TRUE(w) << err;
+  for (const PoseFrame& f : poses)
+    ASSERT_TRUE(w->append_pose(f));
+  ASSERT_TRUE(w->close());
+}
+
 }  // namespace
 
 TEST(SessionExport, CsvHasOneRowPerSegmentPerFrameWithTheRecordedValues) {
@@ -137,25 +148,25 @@ PoseFrame consistent_pose(uint64_t i, std::mt19937& rng) {
   return f;
 }
 
+/// Six consistent poses (seeded) recorded as a 1.62 m body at 100 Hz; returns them.
+std::vector<PoseFrame> record_consistent_take(const std::string& path, unsigned seed) {
+  auto header = make_header();
+  header.config_text = "[body]\nheight_m = 1.62\n[pipeline]\nrate_hz = 100\n";
+  std::mt19937 rng(seed);
+  std::vector<PoseFrame> poses;
+  for (uint64_t i = 0; i < 6; ++i)
+    poses.push_back(consistent_pose(i, rng));
+  record_poses(path, header, poses);
+  return poses;
+}
+
 }  // namespace
 
 TEST(SessionExport, BvhReadsBackThroughTheSkeletonsReaderWithTheRecordedBody) {
   TempDir dir;
   const std::string ses = dir.file("b.mocap"), bvh = dir.file("b.bvh"), err = dir.file("err");
-  auto header = make_header();
-  header.config_text = "[body]\nheight_m = 1.62\n[pipeline]\nrate_hz = 100\n";
-  std::mt19937 rng(3);
   std::vector<PoseFrame> poses;
-  {
-    std::string e;
-    auto w = SessionWriter::create(ses, header, {}, &e);
-    ASSERT_TRUE(w) << e;
-    for (uint64_t i = 0; i < 6; ++i) {
-      poses.push_back(consistent_pose(i, rng));
-      ASSERT_TRUE(w->append_pose(poses.back()));
-    }
-    ASSERT_TRUE(w->close());
-  }
+  ASSERT_NO_FATAL_FAILURE(poses = record_consistent_take(ses, 3));
   ASSERT_EQ(run(ses + " --bvh " + bvh, err), 0) << read_text(err);
   EXPECT_EQ(read_text(err).find("warning"), std::string::npos) << read_text(err);
   const std::string text = read_text(bvh);
@@ -187,20 +198,15 @@ TEST(SessionExport, BridgesDropoutsAndResamples) {
   TempDir dir;
   const std::string ses = dir.file("d.mocap"), csv = dir.file("d.csv"), err = dir.file("err");
   constexpr int kNeck = 2;  // driven by make_pose's sensor 2
-  {
-    std::string e;
-    auto w = SessionWriter::create(ses, make_header(), {}, &e);
-    ASSERT_TRUE(w) << e;
-    for (uint64_t i = 0; i < 60; ++i) {
-      PoseFrame f = make_pose(i);
-      if (i >= 20 && i < 40) {  // silent: held at frame 19's orientation
-        f.q_earth_segment[kNeck] = make_pose(19).q_earth_segment[kNeck];
-        f.sensors[kNeck].last_age_ms = 10.0f * static_cast<float>(i - 19);
-      }
-      ASSERT_TRUE(w->append_pose(f));
+  std::vector<PoseFrame> poses;
+  for (uint64_t i = 0; i < 60; ++i) {
+    poses.push_back(make_pose(i));
+    if (i >= 20 && i < 40) {  // silent: held at frame 19's orientation
+      poses.back().q_earth_segment[kNeck] = make_pose(19).q_earth_segment[kNeck];
+      poses.back().sensors[kNeck].last_age_ms = 10.0f * static_cast<float>(i - 19);
     }
-    ASSERT_TRUE(w->close());
   }
+  ASSERT_NO_FATAL_FAILURE(record_poses(ses, make_header(), poses));
   ASSERT_EQ(run(ses + " --csv " + csv, err), 0) << read_text(err);
   for (const char* fact :
        {"\"frames\":60", "\"body_height_m\":1.75", "\"bridged_segment_frames\":20"})
@@ -233,20 +239,8 @@ TEST(SessionExport, BridgesDropoutsAndResamples) {
 TEST(SessionExport, GltfAndOpenSimFromTheRecordedTake) {
   TempDir dir;
   const std::string ses = dir.file("g.mocap"), err = dir.file("err");
-  auto header = make_header();
-  header.config_text = "[body]\nheight_m = 1.62\n[pipeline]\nrate_hz = 100\n";
-  std::mt19937 rng(5);
   std::vector<PoseFrame> poses;
-  {
-    std::string e;
-    auto w = SessionWriter::create(ses, header, {}, &e);
-    ASSERT_TRUE(w) << e;
-    for (uint64_t i = 0; i < 6; ++i) {
-      poses.push_back(consistent_pose(i, rng));
-      ASSERT_TRUE(w->append_pose(poses.back()));
-    }
-    ASSERT_TRUE(w->close());
-  }
+  ASSERT_NO_FATAL_FAILURE(poses = record_consistent_take(ses, 5));
   // glTF: the container and the time accessor's frame count and range.
   ASSERT_EQ(run(ses + " --gltf " + dir.file("g.glb"), err), 0) << read_text(err);
   const std::string glb = read_text(dir.file("g.glb"));

@@ -2,13 +2,10 @@
 // positions rebuilt into world space), bundle framing on a real UDP socket, and liblo's oscdump
 // as a real third-party receiver checking names, type tags and values.
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
-#include <signal.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <Eigen/Geometry>
@@ -22,6 +19,8 @@
 #include <thread>
 #include <vector>
 
+#include "../common/free_port.hpp"
+#include "../common/oscdump_capture.hpp"
 #include "mocap/daemon/vmc.hpp"
 
 using namespace mocap;
@@ -303,53 +302,17 @@ TEST(VmcSender, RateLimitSkipsFramesCloserThanTheInterval) {
 }
 
 TEST(VmcSender, OscdumpReceivesBonesWithUnityNamesFloatArgsAndOurValues) {
-  if (::access("/usr/bin/oscdump", X_OK) != 0) GTEST_SKIP() << "oscdump (liblo-tools) missing";
-  uint16_t port = 0;
-  ::close(udp_socket_on_free_port(port));  // a port that was free a moment ago
-  int out[2];
-  ASSERT_EQ(::pipe2(out, O_CLOEXEC), 0);
-  const pid_t pid = ::fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    ::dup2(out[1], 1);
-    const std::string p = std::to_string(port);
-    ::execl("/usr/bin/oscdump", "oscdump", "-L", p.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  ::close(out[1]);
+  if (!test::have_oscdump()) GTEST_SKIP() << "oscdump (liblo-tools) missing";
+  const auto port = static_cast<uint16_t>(test::free_loopback_port(SOCK_DGRAM));
   VmcSender s;
   std::string err;
   VmcSender::Options opt;
   opt.port = port;
   ASSERT_TRUE(s.open(opt, &err)) << err;
-  // oscdump gives no readiness signal: send frames until its output shows up, then a few more.
-  std::string text;
-  int k = 0, after_first_output = -1;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (std::chrono::steady_clock::now() < deadline &&
-         (after_first_output < 0 || k < after_first_output + 4)) {
-    s.publish(moving_frame(k++));
-    pollfd pfd{out[0], POLLIN, 0};
-    while (::poll(&pfd, 1, 30) > 0) {
-      char buf[65536];
-      const ssize_t n = ::read(out[0], buf, sizeof buf);
-      if (n <= 0) break;
-      text.append(buf, static_cast<std::size_t>(n));
-    }
-    if (after_first_output < 0 && !text.empty()) after_first_output = k;
-  }
-  // Collect the rest, then stop oscdump.
-  pollfd pfd{out[0], POLLIN, 0};
-  while (::poll(&pfd, 1, 300) > 0) {
-    char buf[65536];
-    const ssize_t n = ::read(out[0], buf, sizeof buf);
-    if (n <= 0) break;
-    text.append(buf, static_cast<std::size_t>(n));
-  }
-  ::kill(pid, SIGTERM);
-  ::waitpid(pid, nullptr, 0);
-  ::close(out[0]);
-  ASSERT_GT(after_first_output, 0) << "oscdump printed nothing";
+  const test::OscdumpCapture cap =
+      test::capture_oscdump(port, [&](int k) { s.publish(moving_frame(k)); });
+  const std::string& text = cap.text;
+  ASSERT_GT(cap.frames_before_first_output, 0) << "oscdump printed nothing";
 
   // Lines: "<timetag> <address> <types> args...". Group them into frames ending at /VMC/Ext/T.
   std::istringstream in(text);

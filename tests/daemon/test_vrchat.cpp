@@ -2,13 +2,10 @@
 // our ENU segments to Unity's left-handed Y-up world, height scaling, the rate limit, and liblo's
 // oscdump as a real receiver checking addresses, type tags and the values of a known pose.
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
-#include <signal.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <Eigen/Geometry>
@@ -19,6 +16,8 @@
 #include <sstream>
 #include <string>
 
+#include "../common/free_port.hpp"
+#include "../common/oscdump_capture.hpp"
 #include "mocap/core/units.hpp"
 #include "mocap/daemon/vrchat.hpp"
 
@@ -122,18 +121,6 @@ TEST(VrchatTracker, PositionsInUnityAxesScaledByHeight) {
 
 namespace {
 
-uint16_t free_udp_port() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t len = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
-
 /// The known pose sent to oscdump: pelvis turned 90 degrees left at (0.5, -0.25, 0.95),
 /// the left foot pitched 30 degrees down, the head rolled; every position distinct.
 PoseFrame known_pose(int k) {
@@ -158,7 +145,7 @@ PoseFrame known_pose(int k) {
 }  // namespace
 
 TEST(VrchatSender, RateLimitAndSlots) {
-  const uint16_t port = free_udp_port();
+  const uint16_t port = static_cast<uint16_t>(test::free_loopback_port(SOCK_DGRAM));
   VrchatSender s;
   VrchatSender::Options opt;
   opt.port = port;
@@ -180,48 +167,18 @@ TEST(VrchatSender, RateLimitAndSlots) {
 }
 
 TEST(VrchatSender, OscdumpReceivesTrackersWithUnityPositionsAndEulerAngles) {
-  if (::access("/usr/bin/oscdump", X_OK) != 0) GTEST_SKIP() << "oscdump (liblo-tools) missing";
-  const uint16_t port = free_udp_port();
-  int out[2];
-  ASSERT_EQ(::pipe2(out, O_CLOEXEC), 0);
-  const pid_t pid = ::fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    ::dup2(out[1], 1);
-    const std::string p = std::to_string(port);
-    ::execl("/usr/bin/oscdump", "oscdump", "-L", p.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  ::close(out[1]);
+  if (!test::have_oscdump()) GTEST_SKIP() << "oscdump (liblo-tools) missing";
+  const uint16_t port = static_cast<uint16_t>(test::free_loopback_port(SOCK_DGRAM));
   VrchatSender s;
   VrchatSender::Options opt;
   opt.port = port;
   opt.scale = 1.0;
   std::string err;
   ASSERT_TRUE(s.open(opt, &err)) << err;
-  std::string text;
-  int k = 0, after_first_output = -1;
-  const auto read_some = [&](int timeout_ms) {
-    pollfd pfd{out[0], POLLIN, 0};
-    while (::poll(&pfd, 1, timeout_ms) > 0) {
-      char buf[65536];
-      const ssize_t n = ::read(out[0], buf, sizeof buf);
-      if (n <= 0) break;
-      text.append(buf, static_cast<std::size_t>(n));
-    }
-  };
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (std::chrono::steady_clock::now() < deadline &&
-         (after_first_output < 0 || k < after_first_output + 4)) {
-    s.publish(known_pose(k++));
-    read_some(30);
-    if (after_first_output < 0 && !text.empty()) after_first_output = k;
-  }
-  read_some(300);
-  ::kill(pid, SIGTERM);
-  ::waitpid(pid, nullptr, 0);
-  ::close(out[0]);
-  ASSERT_GT(after_first_output, 0) << "oscdump printed nothing";
+  const test::OscdumpCapture cap =
+      test::capture_oscdump(port, [&](int k) { s.publish(known_pose(k)); });
+  const std::string& text = cap.text;
+  ASSERT_GT(cap.frames_before_first_output, 0) << "oscdump printed nothing";
 
   // Expected values per address.
   const PoseFrame f = known_pose(0);

@@ -188,6 +188,17 @@ TEST(SlimeVrDecoder, ASensorWithoutAMacIsRefusedWithAClearError) {
   EXPECT_THROW(make_decoder(spec), std::invalid_argument);
 }
 
+/// A SlimeVR server device's spec on a loopback UDP port that was free a moment ago; `server`
+/// becomes that address for the simulated trackers.
+DeviceSpec loopback_server_spec(std::string& server) {
+  server = "127.0.0.1:" + std::to_string(test::free_loopback_port(SOCK_DGRAM));
+  DeviceSpec spec;
+  spec.name = "slimevr";
+  spec.protocol = "slimevr";
+  spec.port = "udp:" + server;
+  return spec;
+}
+
 struct ResetSink : test::CollectSink {
   void on_reset_request(uint16_t device_index, ResetRequest r) override {
     last_index = device_index;
@@ -198,17 +209,14 @@ struct ResetSink : test::CollectSink {
 };
 
 TEST(SlimeVrDevice, UnmodifiedTrackerLogicConnectsOverRealUdpAndStreams) {
-  const int port = test::free_loopback_port(SOCK_DGRAM);
-  DeviceSpec spec;
-  spec.name = "slimevr";
-  spec.protocol = "slimevr";
-  spec.port = "udp:127.0.0.1:" + std::to_string(port);
+  std::string server;
+  DeviceSpec spec = loopback_server_spec(server);
   spec.options["trackers"] = "02:5E:00:00:00:01/0=0;02:5E:00:00:00:01/1=1;02:5E:00:00:00:02/0=2";
   auto dev = make_device(spec, Logger(test::g_log_sink, "test"));
   ResetSink sink;
   dev->start(sink);
   SimSlimeOptions a;
-  a.server = "127.0.0.1:" + std::to_string(port);
+  a.server = server;
   a.mac = "02:5E:00:00:00:01";
   a.sensors = 2;
   SimSlimeOptions b = a;
@@ -256,17 +264,14 @@ TEST(SlimeVrDevice, UnmodifiedTrackerLogicConnectsOverRealUdpAndStreams) {
 // A resting tracker (the firmware sends only changed rotations) still answers the server: its
 // orientation is repeated (flagged interpolated) so the rig never takes it for stale.
 TEST(SlimeVrDevice, AQuietRestingTrackerKeepsItsOrientationAlive) {
-  const int port = test::free_loopback_port(SOCK_DGRAM);
-  DeviceSpec spec;
-  spec.name = "slimevr";
-  spec.protocol = "slimevr";
-  spec.port = "udp:127.0.0.1:" + std::to_string(port);
+  std::string server;
+  DeviceSpec spec = loopback_server_spec(server);
   spec.options["mac"] = "02:5E:00:00:00:09";
   auto dev = make_device(spec, Logger(test::g_log_sink, "test"));
   test::CollectSink sink;
   dev->start(sink);
   SimSlimeOptions o;
-  o.server = "127.0.0.1:" + std::to_string(port);
+  o.server = server;
   o.mac = "02:5E:00:00:00:09";
   o.motion = "static";
   o.optimize_updates = true;

@@ -60,6 +60,21 @@ std::vector<std::string> programs() {
   return p;
 }
 
+/// The lines of a help text where a label that lists options ("Excludes:", "Needs:") lists
+/// none (CLI11 writes a hidden option's name as "").
+std::vector<std::string> empty_option_lists(const std::string& help) {
+  std::vector<std::string> bad;
+  std::istringstream in(help);
+  for (std::string line; std::getline(in, line);)
+    for (const std::string label : {"Excludes:", "Needs:"})
+      for (std::size_t at = line.find(label); at != std::string::npos;
+           at = line.find(label, at + 1)) {
+        const std::size_t next = at + label.size();
+        if (line.compare(next, 2, " -") != 0) bad.push_back(line);
+      }
+  return bad;
+}
+
 std::string joined(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& w : v)
@@ -86,8 +101,11 @@ TEST(Cli, EveryProgramAndSubcommandHasHelpAndVersion) {
       EXPECT_FALSE(r.out.empty()) << joined(argv);
       if (std::string(flag) == "--version")
         EXPECT_NE(r.out.find(MOCAP_PROJECT_VERSION), std::string::npos) << r.out;
-      else
+      else {
         EXPECT_NE(r.out.find("Usage:"), std::string::npos) << joined(argv) << "\n" << r.out;
+        for (const std::string& line : empty_option_lists(r.out))
+          ADD_FAILURE() << joined(argv) << ": a label listing no option: " << line;
+      }
     }
   }
   EXPECT_TRUE(saw_bench_latency);
@@ -132,6 +150,7 @@ TEST(Cli, ConflictingOptionsSayWhich) {
     EXPECT_NE(r.err.find(c.a), std::string::npos) << joined(c.argv) << "\n" << r.err;
     EXPECT_NE(r.err.find(c.b), std::string::npos) << joined(c.argv) << "\n" << r.err;
     EXPECT_NE(r.err.find("excludes"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("excludes \n"), std::string::npos) << r.err;  // names what it excludes
   }
   // Why: each conflicting option is shown with its description.
   const Result why = run(cases[0].argv);

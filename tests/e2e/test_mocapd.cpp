@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "../common/e2e_process.hpp"
+#include "../common/free_port.hpp"
 #include "mocap/daemon/control.hpp"
 #include "mocap/session/session_reader.hpp"
 #include "mocap/skeleton/body_model.hpp"
@@ -40,7 +41,7 @@ namespace {
 
 const std::string kBin = mocap::test::kBinDir;
 using mocap::test::read_json_lines;
-using mocap::test::slurp;
+using mocap::test::slurp_file;
 using mocap::test::spawn;
 using mocap::test::wait_exit;
 
@@ -58,15 +59,7 @@ int run(const std::vector<std::string>& argv, std::string* out = nullptr) {
 }
 
 uint16_t free_port() {
-  int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t n = sizeof a;
-  getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n);
-  close(fd);
-  return ntohs(a.sin_port);
+  return static_cast<uint16_t>(mocap::test::free_loopback_port(SOCK_STREAM));
 }
 
 }  // namespace
@@ -91,7 +84,7 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
     }
     std::this_thread::sleep_for(100ms);
   }
-  ASSERT_TRUE(st.is_object()) << slurp((dir / "mocapd.log.err").string());
+  ASSERT_TRUE(st.is_object()) << slurp_file((dir / "mocapd.log.err").string());
   ASSERT_EQ(st["sensors"].size(), 15u);
   for (const auto& s : st["sensors"])
     EXPECT_EQ(s["state"], "streaming") << s.dump();
@@ -153,7 +146,7 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "start", "b.mocapses"}), 0);
   std::this_thread::sleep_for(700ms);
   kill(d, SIGTERM);
-  EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  EXPECT_EQ(wait_exit(d), 0) << slurp_file((dir / "mocapd.log.err").string());
   EXPECT_FALSE(fs::exists(sock));
 
   for (const char* f : {"a.mocapses", "b.mocapses"}) {
@@ -189,12 +182,12 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
     ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mocapses").string(), "--source", source,
                    "--csv", p2, "--bvh", (dir / "a.bvh").string(), "--quiet"}),
               0);
-    const std::string a = slurp(p1), b = slurp(p2);
+    const std::string a = slurp_file(p1), b = slurp_file(p2);
     EXPECT_GT(a.size(), 10000u);
     EXPECT_EQ(a, b) << source;
     EXPECT_EQ(a.find("nan"), std::string::npos);
   }
-  EXPECT_NE(slurp((dir / "a.bvh").string()).find("HIERARCHY"), std::string::npos);
+  EXPECT_NE(slurp_file((dir / "a.bvh").string()).find("HIERARCHY"), std::string::npos);
   fs::remove_all(dir);
 }
 
@@ -204,8 +197,8 @@ TEST(Mocapd, RefusesBadConfigWithPosition) {
   std::ofstream(f) << "[outputs.json]\nprot = 1\n";
   std::string out;
   EXPECT_EQ(run({kBin + "mocapd", "--config", f.string()}, &out), 1);
-  const std::string err =
-      slurp(fs::temp_directory_path() / ("mocap-e2e-out-" + std::to_string(getpid()) + ".err"));
+  const std::string err = slurp_file(fs::temp_directory_path() /
+                                     ("mocap-e2e-out-" + std::to_string(getpid()) + ".err"));
   EXPECT_NE(err.find(f.string() + ":2:8: outputs.json.prot: unknown key (did you mean 'port'?)"),
             std::string::npos)
       << err;
@@ -223,8 +216,8 @@ TEST(Mocapd, CheckConfigWarnsWhenTheRateExceedsTheBaud) {
                       "port = \"/dev/ttyUSB0\"\nrate_hz = 100\nsegment = \"pelvis\"\n";
   std::string out;
   EXPECT_EQ(run({kBin + "mocapd", "--check-config", f.string()}, &out), 0);
-  const std::string err =
-      slurp(fs::temp_directory_path() / ("mocap-e2e-out-" + std::to_string(getpid()) + ".err"));
+  const std::string err = slurp_file(fs::temp_directory_path() /
+                                     ("mocap-e2e-out-" + std::to_string(getpid()) + ".err"));
   EXPECT_NE(err.find("warning: sensor[0] (hips): witmotion at 100 Hz"), std::string::npos) << err;
   EXPECT_NE(err.find("9600 baud carries 9600: at most 14 samples/s"), std::string::npos) << err;
   fs::remove(f);
@@ -315,7 +308,7 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
     } catch (const std::exception&) {
     }
   }
-  ASSERT_TRUE(calibrated) << st.dump() << slurp((dir / "mocapd.log.err").string());
+  ASSERT_TRUE(calibrated) << st.dump() << slurp_file((dir / "mocapd.log.err").string());
   for (const auto& s : st["sensors"])
     EXPECT_TRUE(s["calibrated"].get<bool>()) << s.dump();
   // The status tells how the calibration went and how far the performer stood from the pose.
@@ -348,7 +341,7 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
     EXPECT_GT(up_z, std::cos(30 * 3.14159265 / 180)) << q.dump() << " w=" << w << zq;
   }
   kill(d, SIGTERM);
-  EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  EXPECT_EQ(wait_exit(d), 0) << slurp_file((dir / "mocapd.log.err").string());
   guard.pid = -1;
   fs::remove_all(dir);
 }
@@ -383,7 +376,7 @@ TEST(Mocapd, DemoPlaysABvhFileWithItsBones) {
     } catch (const std::exception&) {
     }
   }
-  ASSERT_TRUE(calibrated) << out << slurp((dir / "mocapd.log.err").string());
+  ASSERT_TRUE(calibrated) << out << slurp_file((dir / "mocapd.log.err").string());
   const double shank_160_m = mocap::body_dimensions_from_height(1.60)
                                  .joint_offset_m[mocap::index(mocap::Segment::foot_l)]
                                  .norm();
@@ -405,7 +398,7 @@ TEST(Mocapd, DemoPlaysABvhFileWithItsBones) {
     EXPECT_NEAR(shank_m, shank_160_m, 1e-3) << l.dump();
   }
   kill(d, SIGTERM);
-  EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  EXPECT_EQ(wait_exit(d), 0) << slurp_file((dir / "mocapd.log.err").string());
   fs::remove_all(dir);
 }
 
@@ -437,16 +430,16 @@ TEST(Mocapd, DemoSendsVrchatTrackersThatOscdumpReceives) {
     } catch (const std::exception&) {
     }
   }
-  const std::size_t calibrated_at = slurp((dir / "osc.txt").string()).size();
+  const std::size_t calibrated_at = slurp_file((dir / "osc.txt").string()).size();
   if (calibrated) std::this_thread::sleep_for(1000ms);
   kill(d, SIGTERM);
-  EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  EXPECT_EQ(wait_exit(d), 0) << slurp_file((dir / "mocapd.log.err").string());
   kill(dump, SIGTERM);
   wait_exit(dump);
-  ASSERT_TRUE(calibrated) << out << slurp((dir / "mocapd.log.err").string());
+  ASSERT_TRUE(calibrated) << out << slurp_file((dir / "mocapd.log.err").string());
 
   // Lines "<timetag> <address> fff x y z" after the calibration.
-  std::istringstream in(slurp((dir / "osc.txt").string()).substr(calibrated_at));
+  std::istringstream in(slurp_file((dir / "osc.txt").string()).substr(calibrated_at));
   std::string line;
   std::getline(in, line);  // possibly cut at calibrated_at
   std::map<std::string, int> count;
@@ -471,9 +464,9 @@ TEST(Mocapd, DemoSendsVrchatTrackersThatOscdumpReceives) {
   // The sink scales positions by 1.925 / 1.75; Unity y is up: the hip (slot 1), the feet (3,
   // 4) near the floor and the head at a walking performer's heights (0.93 m and 1.54 m standing
   // at 1.75 m, times 1.1).
-  EXPECT_NE(slurp((dir / "mocapd.log.err").string()).find("position scale 1.100"),
+  EXPECT_NE(slurp_file((dir / "mocapd.log.err").string()).find("position scale 1.100"),
             std::string::npos)
-      << slurp((dir / "mocapd.log.err").string());
+      << slurp_file((dir / "mocapd.log.err").string());
   const double hip = last["/tracking/trackers/1/position"][1],
                foot_l = last["/tracking/trackers/3/position"][1],
                foot_r = last["/tracking/trackers/4/position"][1],
@@ -521,8 +514,8 @@ TEST(Score, ReplayOfARealClipIsScoredAgainstItsTruth) {
   }
   std::string out;
   EXPECT_EQ(run({kBin + "mocap", "score", samples, truth}, &out), 1);  // not a pose file
-  const std::string err =
-      slurp(fs::temp_directory_path() / ("mocap-e2e-out-" + std::to_string(getpid()) + ".err"));
+  const std::string err = slurp_file(fs::temp_directory_path() /
+                                     ("mocap-e2e-out-" + std::to_string(getpid()) + ".err"));
   EXPECT_NE(err.find("not a unit quaternion"), std::string::npos) << err;
   fs::remove_all(dir);
 }

@@ -85,7 +85,7 @@ TEST(SlimeVrMocapd, TrackersConnectStreamCalibrateByButtonRecordAndReplay) {
     for (const auto& s : st["sensors"])
       streaming = streaming && s["state"] == "streaming";
   }
-  ASSERT_TRUE(streaming) << st.dump() << slurp((dir / "mocapd.log.err").string());
+  ASSERT_TRUE(streaming) << st.dump() << slurp_file((dir / "mocapd.log.err").string());
   EXPECT_TRUE(board3.connected());
   EXPECT_FALSE(st["calibrated"].get<bool>());
 
@@ -98,8 +98,9 @@ TEST(SlimeVrMocapd, TrackersConnectStreamCalibrateByButtonRecordAndReplay) {
     calibrated = st.is_object() && st.value("calibrated", false);
   }
   EXPECT_TRUE(calibrated) << st.dump();
-  EXPECT_NE(slurp((dir / "mocapd.log.err").string()).find("asked for a full (calibration) reset"),
-            std::string::npos);
+  EXPECT_NE(
+      slurp_file((dir / "mocapd.log.err").string()).find("asked for a full (calibration) reset"),
+      std::string::npos);
 
   // Board 3 restarts (a new socket, as after a power cycle) turning: it handshakes again and
   // its segment follows it, while the boards at rest keep theirs still.
@@ -156,7 +157,7 @@ TEST(SlimeVrMocapd, TrackersConnectStreamCalibrateByButtonRecordAndReplay) {
   for (pid_t p : sims)
     EXPECT_EQ(wait_exit(p), 0);
   kill(d, SIGTERM);
-  EXPECT_EQ(wait_exit(d), 0) << slurp((dir / "mocapd.log.err").string());
+  EXPECT_EQ(wait_exit(d), 0) << slurp_file((dir / "mocapd.log.err").string());
 
   mocap::SessionReader r;
   std::string err;
@@ -174,7 +175,7 @@ TEST(SlimeVrMocapd, TrackersConnectStreamCalibrateByButtonRecordAndReplay) {
                           (dir / "replay.out").string(), &out),
               0)
         << out;
-    poses[k] = slurp(p);
+    poses[k] = slurp_file(p);
   }
   EXPECT_GT(poses[0].size(), 10000u);
   EXPECT_EQ(poses[0], poses[1]);
@@ -198,7 +199,7 @@ TEST(SlimeVrMocapd, DevicesListsTrackersThatSayHello) {
   board.start();
   EXPECT_EQ(wait_exit(p), 0);
   board.stop();
-  const std::string out = slurp(out_file.string());
+  const std::string out = slurp_file(out_file.string());
   EXPECT_NE(out.find("tracker 02:5E:00:00:AB:CD at 127.0.0.1"), std::string::npos) << out;
   EXPECT_NE(out.find("firmware \"0.6.0-sim\", protocol 22"), std::string::npos) << out;
   EXPECT_NE(out.find("options = { mac = \"02:5E:00:00:AB:CD\", tracker = 0 }"), std::string::npos)

@@ -11,11 +11,13 @@
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -216,10 +218,7 @@ Daemon::~Daemon() {
 }
 
 std::string Daemon::log_text() const {
-  std::ifstream f(log_);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
+  return slurp_file(log_);
 }
 
 nlohmann::json Daemon::call(const std::string& line, int timeout_ms) const {
@@ -325,6 +324,49 @@ nlohmann::json sensor_status(const nlohmann::json& status, const std::string& na
   for (const auto& s : status.at("sensors"))
     if (s.value("name", std::string()) == name) return s;
   return nlohmann::json::object();  // not listed yet (before the first frame)
+}
+
+bool both_streaming(Daemon& d) {
+  const auto st = d.status();
+  return sensor_status(st, "a").value("state", "") == "streaming" &&
+         sensor_status(st, "b").value("state", "") == "streaming";
+}
+
+TwoSensorDaemon::TwoSensorDaemon(const std::string& name, std::vector<std::string> extra_args,
+                                 const std::string& extra_config)
+    : rig(dir),
+      json_port(free_tcp_port()),
+      d(dir, name, base_config(dir, json_port, extra_config) + rig.sensors_toml(),
+        std::move(extra_args)) {}
+
+bool TwoSensorDaemon::ready_and_streaming() {
+  using namespace std::chrono_literals;
+  return d.wait_ready(15s) && wait_until([&] { return both_streaming(d); }, 15s);
+}
+
+Result run_bin(const std::string& program, const std::vector<std::string>& args, int timeout_s) {
+  std::vector<std::string> argv;
+  if (timeout_s > 0) argv = {"/usr/bin/timeout", std::to_string(timeout_s)};
+  argv.push_back(std::string(MOCAP_BINARY_DIR) + "/bin/" + program);
+  argv.insert(argv.end(), args.begin(), args.end());
+  return run(std::move(argv));
+}
+
+int connect_unix_as_nobody(const std::string& path) {
+  const pid_t pid = ::fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    sockaddr_un a{};
+    a.sun_family = AF_UNIX;
+    std::strncpy(a.sun_path, path.c_str(), sizeof a.sun_path - 1);
+    const int rc = ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+    ::_exit(rc == 0 ? 1 : (errno == EACCES ? 0 : 2));
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 // ---- JSON stream client ----

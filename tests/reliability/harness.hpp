@@ -15,9 +15,14 @@
 #include <thread>
 #include <vector>
 
+#include "../common/run_program.hpp"
 #include "mocap/devsim/sim_encoder.hpp"
 
 namespace mocap::reliability {
+
+using test::Result;
+using test::run;
+using test::slurp_file;
 
 /// A fresh directory under /tmp, removed (recursively) on destruction.
 class TempDir {
@@ -161,6 +166,33 @@ class StreamClient {
   int fd_ = -1;
   std::shared_ptr<State> st_;
 };
+
+/// True once sensors "a" and "b" (a TwoSensorRig's) both report "streaming" in d's status.
+bool both_streaming(Daemon& d);
+
+/// The suite's usual set-up: a fresh directory, a TwoSensorRig in it and mocapd on it
+/// (base_config with a fresh JSON stream port and `extra_config`, then the sensors' tables;
+/// `extra_args` on its command line). The test checks d.wait_ready() or ready_and_streaming()
+/// before using it.
+struct TwoSensorDaemon {
+  explicit TwoSensorDaemon(const std::string& name, std::vector<std::string> extra_args = {},
+                           const std::string& extra_config = "");
+  /// True once mocapd answers and both sensors are streaming (15 s each at most).
+  bool ready_and_streaming();
+  TempDir dir;
+  TwoSensorRig rig;
+  int json_port;
+  Daemon d;
+};
+
+/// Runs <build>/bin/<program> with `args` to completion (killed by timeout(1) after timeout_s
+/// if that is > 0); its exit code, stdout and stderr.
+Result run_bin(const std::string& program, const std::vector<std::string>& args, int timeout_s = 0);
+
+/// Tries to connect to the Unix socket at `path` as another user (nobody, from a forked child,
+/// so the caller must be root): 0 = refused by the kernel (EACCES), 1 = connected, 2 = another
+/// errno, 3 = could not become nobody, -1 = the child did not exit normally.
+int connect_unix_as_nobody(const std::string& path);
 
 /// Nearest-rank percentile of a sample (sorted copy); 0 for an empty sample.
 double percentile(std::vector<double> v, double p);

@@ -28,11 +28,8 @@ using namespace mocap::reliability;
 using namespace std::chrono_literals;
 
 TEST(Clients, ManyStreamClientsASilentOneAndAChurningLoopLoseNoFrames) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  const int port = free_tcp_port();
-  Daemon d(dir, "clients", base_config(dir, port) + rig.sensors_toml(),
-           {"--set", "outputs.json.max_clients=128"});
+  TwoSensorDaemon setup("clients", {"--set", "outputs.json.max_clients=128"});
+  auto& [dir, rig, port, d] = setup;
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
 
   // 100 readers at once, one client that never reads, and a thread connecting and dropping
@@ -106,10 +103,8 @@ TEST(Clients, ManyStreamClientsASilentOneAndAChurningLoopLoseNoFrames) {
 }
 
 TEST(Clients, MalformedAndOversizedControlRequestsGetErrorsAndTheDaemonCarriesOn) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  const int port = free_tcp_port();
-  Daemon d(dir, "control", base_config(dir, port) + rig.sensors_toml());
+  TwoSensorDaemon setup("control");
+  auto& [dir, rig, port, d] = setup;
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
   StreamClient watcher(port);
 
@@ -173,21 +168,8 @@ TEST(Clients, ControlSocketIsClosedToOtherUsers) {
   EXPECT_EQ(sb.st_uid, ::geteuid());
   if (::geteuid() != 0) GTEST_SKIP() << "needs root to switch to another user";
   // Another user (nobody) tries to connect: refused by the kernel.
-  const pid_t pid = ::fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
-    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
-    sockaddr_un a{};
-    a.sun_family = AF_UNIX;
-    std::strncpy(a.sun_path, d.socket().c_str(), sizeof a.sun_path - 1);
-    const int rc = ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-    ::_exit(rc == 0 ? 1 : (errno == EACCES ? 0 : 2));
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0) << "1 = another user connected, 2 = unexpected errno";
+  EXPECT_EQ(connect_unix_as_nobody(d.socket()), 0)
+      << "1 = another user connected, 2 = unexpected errno, 3 = not nobody, -1 = died";
   EXPECT_TRUE(d.status().value("ok", false));
   EXPECT_EQ(d.quit(), 0) << d.log_text();
 }
@@ -223,9 +205,8 @@ int connect_tcp(int port) {
 }  // namespace
 
 TEST(Clients, SilentControlClientsDelayNobody) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  Daemon d(dir, "silentctl", base_config(dir, free_tcp_port()) + rig.sensors_toml());
+  TwoSensorDaemon setup("silentctl");
+  auto& [dir, rig, port, d] = setup;
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
   std::vector<int> idle;
   for (int i = 0; i < 3; ++i) {
@@ -252,11 +233,8 @@ TEST(Clients, SilentControlClientsDelayNobody) {
 }
 
 TEST(Clients, FdExhaustionNeitherSpinsNorSilencesControl) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  const int port = free_tcp_port();
-  Daemon d(dir, "fds", base_config(dir, port) + rig.sensors_toml(),
-           {"--set", "outputs.json.max_clients=1000"});
+  TwoSensorDaemon setup("fds", {"--set", "outputs.json.max_clients=1000"});
+  auto& [dir, rig, port, d] = setup;
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
   // Leave the daemon 40 more descriptors than it has, then connect 120 stream clients.
   const rlimit lim{static_cast<rlim_t>(d.fd_count() + 40), static_cast<rlim_t>(d.fd_count() + 40)};
@@ -287,11 +265,8 @@ TEST(Clients, FdExhaustionNeitherSpinsNorSilencesControl) {
 }
 
 TEST(Clients, StreamClientsThatNeverReadAreEvictedFirstWhenFull) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  const int port = free_tcp_port();
-  Daemon d(dir, "evict", base_config(dir, port) + rig.sensors_toml(),
-           {"--set", "outputs.json.max_clients=4"});
+  TwoSensorDaemon setup("evict", {"--set", "outputs.json.max_clients=4"});
+  auto& [dir, rig, port, d] = setup;
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
   // The server is full of clients that never read.
   std::vector<std::unique_ptr<StreamClient>> idle;

@@ -20,25 +20,16 @@ struct CheckRun {
   std::string out;
 };
 
-CheckRun check_config(const TempDir& dir, const std::string& path) {
-  const std::string log = dir.file("check.out");
-  const std::string cmd = "timeout 60 " + std::string(MOCAP_BINARY_DIR) +
-                          "/bin/mocapd --check-config '" + path + "' >'" + log + "' 2>&1";
-  const int st = std::system(cmd.c_str());
-  CheckRun r;
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-  std::ifstream f(log, std::ios::binary);
-  std::ostringstream s;
-  s << f.rdbuf();
-  r.out = s.str();
-  return r;
+CheckRun check_config(const std::string& path) {
+  const Result r = run_bin("mocapd", {"--check-config", path}, 60);
+  return {r.code, r.err + r.out};
 }
 
 }  // namespace
 
 TEST(ConfigLimits, ADirectoryIsNotAConfiguration) {
   TempDir dir;
-  const CheckRun r = check_config(dir, dir.path());
+  const CheckRun r = check_config(dir.path());
   EXPECT_NE(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("is a directory"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("OK"), std::string::npos) << r.out;
@@ -53,7 +44,7 @@ TEST(ConfigLimits, AHugeFileIsRefusedWithoutReadingItAll) {
     for (size_t written = 0; written < (40u << 20); written += line.size())
       f << line;  // 40 MiB of unknown keys
   }
-  const CheckRun r = check_config(dir, path);
+  const CheckRun r = check_config(path);
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.out.find("1 MiB"), std::string::npos) << r.out.substr(0, 2000);
   EXPECT_LT(r.out.size(), 2000u) << r.out.substr(0, 2000);
@@ -67,7 +58,7 @@ TEST(ConfigLimits, ManyProblemsStopAfterFiftyAndLongValuesAreCut) {
     for (int i = 0; i < 20000; ++i)
       f << "unknown_" << i << " = " << i << "\n";  // ~400 KB: under the size limit
   }
-  CheckRun r = check_config(dir, many);
+  CheckRun r = check_config(many);
   EXPECT_NE(r.code, 0);
   const auto lines = std::count(r.out.begin(), r.out.end(), '\n');
   EXPECT_LE(lines, 53) << r.out.substr(0, 3000);
@@ -80,7 +71,7 @@ TEST(ConfigLimits, ManyProblemsStopAfterFiftyAndLongValuesAreCut) {
     f << "[daemon]\nlog_level = \"" << std::string(500000, 'x') << "\"\n"
       << std::string(100000, 'y') << " = 1\n";
   }
-  r = check_config(dir, longv);
+  r = check_config(longv);
   EXPECT_NE(r.code, 0);
   EXPECT_LT(r.out.size(), 4000u) << r.out.substr(0, 4000);
   EXPECT_NE(r.out.find("more bytes not shown"), std::string::npos) << r.out.substr(0, 4000);

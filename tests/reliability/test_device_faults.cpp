@@ -35,6 +35,23 @@ double recovery_s(Daemon& d, const std::string& name, std::chrono::milliseconds 
   return ok ? std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() : -1;
 }
 
+/// After `gone` stopped sending: it is reported (not streaming) within 10 s, and over the next
+/// `watch` sensor "a" streams on without drops while frames keep coming.
+void expect_reported_while_a_streams(Daemon& d, const std::string& gone,
+                                     std::chrono::milliseconds watch) {
+  EXPECT_TRUE(
+      wait_until([&] { return sensor_status(d.status(), gone).value("state", "") != "streaming"; },
+                 std::chrono::seconds(10)))
+      << d.status().dump();
+  const uint64_t a_drops = sensor_status(d.status(), "a").value("drops", 0ull);
+  const uint64_t frame_before = d.status().value("frame", 0ull);
+  std::this_thread::sleep_for(watch);
+  const auto mid = d.status();
+  EXPECT_EQ(sensor_status(mid, "a").value("state", ""), "streaming") << mid.dump();
+  EXPECT_EQ(sensor_status(mid, "a").value("drops", 0ull), a_drops);
+  EXPECT_GT(mid.value("frame", 0ull), frame_before);
+}
+
 }  // namespace
 
 TEST(DeviceFaults, FaultySensorsAreReportedAndTheOthersKeepStreaming) {
@@ -154,17 +171,8 @@ TEST(DeviceFaults, DeviceThatDisappearsIsReportedAndRecovers) {
     // Unplug: the pty is closed (the driver sees a hang-up) and no data arrives.
     sb.mode = FaultMode::silent;
     b.vanish();
-    const bool reported = wait_until(
-        [&] { return sensor_status(d.status(), "b").value("state", "") != "streaming"; }, 10s);
-    EXPECT_TRUE(reported) << d.status().dump();
-    const uint64_t a_before = sensor_status(d.status(), "a").value("drops", 0ull);
-    const uint64_t frame_before = d.status().value("frame", 0ull);
-    std::this_thread::sleep_for(500ms);
-    // Meanwhile the other sensor streams and frames keep coming.
-    const auto mid = d.status();
-    EXPECT_EQ(sensor_status(mid, "a").value("state", ""), "streaming") << mid.dump();
-    EXPECT_EQ(sensor_status(mid, "a").value("drops", 0ull), a_before);
-    EXPECT_GT(mid.value("frame", 0ull), frame_before);
+    // Reported; meanwhile the other sensor streams and frames keep coming.
+    expect_reported_while_a_streams(d, "b", 500ms);
     // Plug back in at the same path.
     b.reappear();
     sb.mode = FaultMode::normal;
@@ -253,16 +261,7 @@ TEST(DeviceFaults, UdpSensorDropOutAndNoiseAreReportedAndItRecovers) {
   for (int round = 0; round < 2; ++round) {
     // Radio drop-out: the datagrams stop. The sensor is reported, the other one streams on.
     w.mode = FaultMode::silent;
-    EXPECT_TRUE(wait_until(
-        [&] { return sensor_status(d.status(), "w").value("state", "") != "streaming"; }, 10s))
-        << d.status().dump();
-    const uint64_t a_drops = sensor_status(d.status(), "a").value("drops", 0ull);
-    const uint64_t frame_before = d.status().value("frame", 0ull);
-    std::this_thread::sleep_for(700ms);
-    const auto mid = d.status();
-    EXPECT_EQ(sensor_status(mid, "a").value("state", ""), "streaming") << mid.dump();
-    EXPECT_EQ(sensor_status(mid, "a").value("drops", 0ull), a_drops);
-    EXPECT_GT(mid.value("frame", 0ull), frame_before);
+    expect_reported_while_a_streams(d, "w", 700ms);
     w.mode = FaultMode::normal;
     const double rec = recovery_s(d, "w", 10s);
     EXPECT_GE(rec, 0) << "the UDP sensor did not come back\n" << d.log_text();

@@ -30,23 +30,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
 /// Runs mocapd with a config to completion (it is expected to refuse to start).
 int run_mocapd(const TempDir& dir, const std::string& name, const std::string& config,
                std::string& out) {
-  const std::string cfg = dir.file(name + ".toml"), log = dir.file(name + ".log");
+  const std::string cfg = dir.file(name + ".toml");
   { std::ofstream(cfg) << config; }
-  const std::string cmd = "timeout 20 " + std::string(MOCAP_BINARY_DIR) + "/bin/mocapd --config '" +
-                          cfg + "' >'" + log + "' 2>&1";
-  const int st = std::system(cmd.c_str());
-  out = slurp(log);
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
+  const Result r = run_bin("mocapd", {"--config", cfg}, 20);
+  out = r.err + r.out;
+  return r.code;
 }
 
 std::string posture_config(const std::string& shm) {
@@ -188,12 +179,9 @@ TEST(Instances, MocapctlRefusesAControlSocketServedByAnotherUser) {
     EXPECT_NE(std::string(e.what()).find("uid 65534"), std::string::npos) << e.what();
   }
   // mocapctl itself exits non-zero and says why.
-  const std::string log = dir.file("ctl.out");
-  const int st = std::system((std::string(MOCAP_BINARY_DIR) + "/bin/mocapctl --socket '" + sock +
-                              "' status >'" + log + "' 2>&1")
-                                 .c_str());
-  EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) != 0);
-  EXPECT_NE(slurp(log).find("not by us"), std::string::npos) << slurp(log);
+  const Result ctl = run_bin("mocapctl", {"--socket", sock, "status"});
+  EXPECT_TRUE(ctl.code > 0 && ctl.code < 128) << ctl.code;
+  EXPECT_NE((ctl.err + ctl.out).find("not by us"), std::string::npos) << ctl.err << ctl.out;
   ::kill(pid, SIGKILL);
   ::waitpid(pid, nullptr, 0);
 }

@@ -28,28 +28,15 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool both_streaming(Daemon& d) {
-  const auto st = d.status();
-  return sensor_status(st, "a").value("state", "") == "streaming" &&
-         sensor_status(st, "b").value("state", "") == "streaming";
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-/// Runs mocapctl with `args`; returns its exit code and stderr+stdout in `out`.
-int mocapctl(const TempDir& dir, const std::string& socket, const std::string& args,
-             std::string& out) {
-  const std::string log = dir.file("mocapctl.out");
-  const std::string cmd = std::string(MOCAP_BINARY_DIR) + "/bin/mocapctl --socket '" + socket +
-                          "' " + args + " >'" + log + "' 2>&1";
-  const int st = std::system(cmd.c_str());
-  out = slurp(log);
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
+/// Runs mocapctl with `args` (words); returns its exit code and stderr+stdout in `out`.
+int mocapctl(const std::string& socket, const std::string& args, std::string& out) {
+  std::vector<std::string> argv{"--socket", socket};
+  std::istringstream words(args);
+  for (std::string w; words >> w;)
+    argv.push_back(w);
+  const Result r = run_bin("mocapctl", argv);
+  out = r.err + r.out;
+  return r.code;
 }
 
 uint64_t poses_in(const std::string& path) {
@@ -66,25 +53,23 @@ uint64_t poses_in(const std::string& path) {
 }  // namespace
 
 TEST(Recordings, AnExistingTakeIsNeverOverwrittenAndMocapctlSaysWhy) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  Daemon d(dir, "over", base_config(dir, free_tcp_port()) + rig.sensors_toml());
-  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
-  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  TwoSensorDaemon setup("over");
+  auto& [dir, rig, port, d] = setup;
+  ASSERT_TRUE(setup.ready_and_streaming()) << d.log_text();
   std::string out;
-  ASSERT_EQ(mocapctl(dir, d.socket(), "record start take1.mocapses", out), 0) << out;
+  ASSERT_EQ(mocapctl(d.socket(), "record start take1.mocapses", out), 0) << out;
   std::this_thread::sleep_for(400ms);
-  ASSERT_EQ(mocapctl(dir, d.socket(), "record stop", out), 0) << out;
+  ASSERT_EQ(mocapctl(d.socket(), "record stop", out), 0) << out;
   EXPECT_NE(out.find("frames"), std::string::npos) << out;
-  const std::string before = slurp(dir.file("take1.mocapses"));
+  const std::string before = slurp_file(dir.file("take1.mocapses"));
   ASSERT_GT(before.size(), 1000u);
   // Again with the same name: refused, named, mocapctl exits non-zero, the take is untouched.
-  EXPECT_NE(mocapctl(dir, d.socket(), "record start take1.mocapses", out), 0) << out;
+  EXPECT_NE(mocapctl(d.socket(), "record start take1.mocapses", out), 0) << out;
   EXPECT_NE(out.find("take1.mocapses"), std::string::npos) << out;
   EXPECT_NE(out.find("already exists"), std::string::npos) << out;
   EXPECT_TRUE(d.status().value("recording", "x").empty());
   std::this_thread::sleep_for(200ms);
-  EXPECT_EQ(slurp(dir.file("take1.mocapses")), before);
+  EXPECT_EQ(slurp_file(dir.file("take1.mocapses")), before);
   EXPECT_EQ(d.quit(), 0) << d.log_text();
 }
 
@@ -123,7 +108,7 @@ TEST(Recordings, NamesCannotLeaveTheRecordingDirectory) {
         << c.name << ": " << reply.dump();
     EXPECT_TRUE(d.status().value("recording", "x").empty()) << c.name;
   }
-  EXPECT_EQ(slurp(victim), "precious\n");
+  EXPECT_EQ(slurp_file(victim), "precious\n");
   EXPECT_FALSE(fs::exists(dir.file("x.mocapses")));
   EXPECT_FALSE(fs::exists(outside.file("x.mocapses")));
   EXPECT_FALSE(fs::exists(outside.file("abs.mocapses")));
@@ -139,11 +124,9 @@ TEST(Recordings, NamesCannotLeaveTheRecordingDirectory) {
 }
 
 TEST(Recordings, WithoutANameAFreshTakeNameIsPickedAndStopReportsWhatWasRecorded) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  Daemon d(dir, "fresh", base_config(dir, free_tcp_port()) + rig.sensors_toml());
-  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
-  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  TwoSensorDaemon setup("fresh");
+  auto& [dir, rig, port, d] = setup;
+  ASSERT_TRUE(setup.ready_and_streaming()) << d.log_text();
   std::vector<std::string> files;
   for (int i = 0; i < 3; ++i) {  // within a second or two: the same base name, suffixed
     const auto start = d.call("record start");
@@ -183,14 +166,14 @@ TEST(Recordings, AutoStartAfterAKillNineKeepsTheCrashedTake) {
     crashed_size = fs::file_size(dir.file("auto.mocapses"));
   }
   ASSERT_GT(crashed_size, 1000u);
-  const std::string crashed = slurp(dir.file("auto.mocapses"));
+  const std::string crashed = slurp_file(dir.file("auto.mocapses"));
   Daemon d(dir, "auto2", cfg);  // as systemd's Restart=on-failure would
   ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
   const std::string now = d.status().value("recording", "");
   EXPECT_EQ(fs::path(now).filename(), "auto-2.mocapses") << now;
-  EXPECT_EQ(slurp(dir.file("auto.mocapses")), crashed);
+  EXPECT_EQ(slurp_file(dir.file("auto.mocapses")), crashed);
   EXPECT_EQ(d.quit(), 0) << d.log_text();
-  EXPECT_EQ(slurp(dir.file("auto.mocapses")), crashed);
+  EXPECT_EQ(slurp_file(dir.file("auto.mocapses")), crashed);
   EXPECT_TRUE(fs::exists(dir.file("auto-2.mocapses")));
 }
 
@@ -204,13 +187,11 @@ struct Exported {
 };
 Exported export_csv(const TempDir& dir, const std::string& in, const std::string& tag) {
   Exported e;
-  const std::string out = dir.file(tag + ".csv"), log = dir.file(tag + ".err");
-  const std::string cmd = std::string(MOCAP_BINARY_DIR) + "/bin/mocap export '" + in + "' --csv '" +
-                          out + "' 2>'" + log + "'";
-  const int st = std::system(cmd.c_str());
-  e.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-  e.err = slurp(log);
-  e.csv = slurp(out);
+  const std::string out = dir.file(tag + ".csv");
+  const Result r = run_bin("mocap", {"export", in, "--csv", out});
+  e.code = r.code;
+  e.err = r.err;
+  e.csv = slurp_file(out);
   const size_t rows = static_cast<size_t>(std::count(e.csv.begin(), e.csv.end(), '\n'));
   e.frames = rows > 0 ? (rows - 1) / 16 : 0;
   return e;
@@ -219,11 +200,9 @@ Exported export_csv(const TempDir& dir, const std::string& in, const std::string
 }  // namespace
 
 TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  Daemon d(dir, "flip", base_config(dir, free_tcp_port()) + rig.sensors_toml());
-  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
-  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  TwoSensorDaemon setup("flip");
+  auto& [dir, rig, port, d] = setup;
+  ASSERT_TRUE(setup.ready_and_streaming()) << d.log_text();
   ASSERT_TRUE(d.call("record start take.mocapses").value("ok", false));
   std::this_thread::sleep_for(1500ms);
   ASSERT_TRUE(d.call("record stop").value("ok", false));
@@ -234,7 +213,7 @@ TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
   ASSERT_GT(original.frames, 10u) << original.err;
 
   // The block holding the middle byte, from the intact file.
-  const std::string bytes = slurp(path);
+  const std::string bytes = slurp_file(path);
   const uint64_t mid = bytes.size() / 2;
   uint64_t block_begin = 0, block_end = 0;
   {
@@ -304,12 +283,9 @@ TEST(Recordings, OneFlippedBitInARecordedSessionLosesAtMostItsBlock) {
 // the same frames as it would uncompressed, and one flipped bit in the middle loses only the
 // compressed block holding it (reported, exit status 3).
 TEST(Recordings, ACompressedTakeExportsAndABitFlipLosesOnlyItsCompressedBlock) {
-  TempDir dir;
-  TwoSensorRig rig(dir);
-  Daemon d(dir, "zstd",
-           base_config(dir, free_tcp_port(), "compression = \"zstd\"\n") + rig.sensors_toml());
-  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
-  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  TwoSensorDaemon setup("zstd", {}, "compression = \"zstd\"\n");
+  auto& [dir, rig, port, d] = setup;
+  ASSERT_TRUE(setup.ready_and_streaming()) << d.log_text();
   ASSERT_TRUE(d.call("record start take.mocapses").value("ok", false));
   std::this_thread::sleep_for(2000ms);
   const auto stop = d.call("record stop");
@@ -323,7 +299,7 @@ TEST(Recordings, ACompressedTakeExportsAndABitFlipLosesOnlyItsCompressedBlock) {
   EXPECT_EQ(poses_in(path), stop.value("frames", uint64_t{0}));
 
   // Which compressed blocks hold how many poses.
-  const std::string bytes = slurp(path);
+  const std::string bytes = slurp_file(path);
   std::map<uint64_t, int> poses_at;
   uint64_t compressed = 0;
   {

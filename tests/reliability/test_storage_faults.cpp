@@ -83,12 +83,6 @@ bool private_mounts(std::string& why) {
   return true;
 }
 
-bool both_streaming(Daemon& d) {
-  const auto st = d.status();
-  return sensor_status(st, "a").value("state", "") == "streaming" &&
-         sensor_status(st, "b").value("state", "") == "streaming";
-}
-
 }  // namespace
 
 TEST(StorageFaults, KillNineWhileRecordingAlwaysLeavesAReadableFile) {
@@ -131,14 +125,12 @@ TEST(StorageFaults, KillNineWhileRecordingAlwaysLeavesAReadableFile) {
 TEST(StorageFaults, DiskFullMidRecordingStopsTheRecordingOnlyAndKeepsWhatWasWritten) {
   std::string why;
   if (!private_mounts(why)) GTEST_SKIP() << "needs root for a small tmpfs: " << why;
-  TempDir dir;
+  TwoSensorDaemon setup("full");
+  auto& [dir, rig, port, d] = setup;
   const std::string small = dir.file("small");
   ASSERT_EQ(::mkdir(small.c_str(), 0755), 0);
   ASSERT_EQ(::mount("tmpfs", small.c_str(), "tmpfs", 0, "size=256k"), 0) << std::strerror(errno);
-  TwoSensorRig rig(dir);
-  Daemon d(dir, "full", base_config(dir, free_tcp_port()) + rig.sensors_toml());
-  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
-  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  ASSERT_TRUE(setup.ready_and_streaming()) << d.log_text();
   const std::string path = small + "/full.mocap";
   const auto reply = d.call("record start " + path);
   ASSERT_TRUE(reply.value("ok", false)) << reply.dump();
@@ -183,17 +175,15 @@ TEST(StorageFaults, DiskFullMidRecordingStopsTheRecordingOnlyAndKeepsWhatWasWrit
 TEST(StorageFaults, UnwritableTargetsGetAClearErrorAndThePipelineContinues) {
   std::string why;
   const bool mounts = private_mounts(why);
-  TempDir dir;
+  TwoSensorDaemon setup("ro");
+  auto& [dir, rig, port, d] = setup;
   const std::string ro = dir.file("ro");
   ASSERT_EQ(::mkdir(ro.c_str(), 0755), 0);
   if (mounts) {
     ASSERT_EQ(::mount("tmpfs", ro.c_str(), "tmpfs", MS_RDONLY, "size=64k"), 0)
         << std::strerror(errno);
   }
-  TwoSensorRig rig(dir);
-  Daemon d(dir, "ro", base_config(dir, free_tcp_port()) + rig.sensors_toml());
-  ASSERT_TRUE(d.wait_ready(15s)) << d.log_text();
-  ASSERT_TRUE(wait_until([&] { return both_streaming(d); }, 15s)) << d.log_text();
+  ASSERT_TRUE(setup.ready_and_streaming()) << d.log_text();
 
   struct Case {
     std::string target, expect;

@@ -27,12 +27,6 @@ using namespace std::chrono_literals;
 
 namespace {
 
-bool both_streaming(Daemon& d) {
-  const auto st = d.status();
-  return sensor_status(st, "a").value("state", "") == "streaming" &&
-         sensor_status(st, "b").value("state", "") == "streaming";
-}
-
 /// Runs examples/joint_angles.py ADDRESS FRAMES with python3; its exit code and stdout+stderr.
 int run_example(const std::string& address, int frames, std::string& out) {
   const std::string cmd = "timeout 30 python3 '" + std::string(MOCAP_SOURCE_DIR) +
@@ -150,21 +144,8 @@ TEST(Streams, ThePrivateStreamOnAUnixSocketIsMode0600AndClosedToOtherUsers) {
   check_example_output(out, 3, started);
 
   if (::geteuid() == 0) {  // another user (nobody) is refused by the kernel
-    const pid_t pid = ::fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-      if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
-      const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
-      sockaddr_un a{};
-      a.sun_family = AF_UNIX;
-      std::strncpy(a.sun_path, path.c_str(), sizeof a.sun_path - 1);
-      const int rc = ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-      ::_exit(rc == 0 ? 1 : (errno == EACCES ? 0 : 2));
-    }
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    ASSERT_TRUE(WIFEXITED(status));
-    EXPECT_EQ(WEXITSTATUS(status), 0) << "1 = another user connected, 2 = unexpected errno";
+    EXPECT_EQ(connect_unix_as_nobody(path), 0)
+        << "1 = another user connected, 2 = unexpected errno, 3 = not nobody, -1 = died";
   }
   EXPECT_EQ(d.quit(), 0) << d.log_text();
   EXPECT_NE(::lstat(path.c_str(), &sb), 0);  // removed on exit

@@ -46,13 +46,18 @@ ImuSample sample(int id, const Eigen::Quaterniond& q_earth_sensor, const Eigen::
   return s;
 }
 
-void run(bool use_mag, const std::function<void(BodyTracker&, const PoseFrame&)>& check) {
-  Rig rig;
+/// A tracker of the test rig calibrating from the mount normals over a 1 s capture.
+BodyTracker mount_normals_tracker(const Rig& rig, bool use_mag) {
   TrackerOptions o;
   o.use_mag = use_mag;
   o.calibrator.heading = HeadingSource::mount_normals;
   o.calibrator.capture_s = 1.0;
-  BodyTracker tracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
+  return BodyTracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
+}
+
+void run(bool use_mag, const std::function<void(BodyTracker&, const PoseFrame&)>& check) {
+  Rig rig;
+  BodyTracker tracker = mount_normals_tracker(rig, use_mag);
   tracker.start_calibration(CalibrationPose::npose, 1'500'000'000);
   const Eigen::Vector3d w_earth(0.2, 0.5, 1.0);  // the whole body turning after 3 s
   PoseFrame frame;
@@ -94,11 +99,7 @@ TEST(BodyTracker, EachSegmentIsItsSensorsFilterThroughTheCalibration) {
 
 void six_d_calibration(bool rig_use_mag) {
   Rig rig;
-  TrackerOptions o;
-  o.use_mag = rig_use_mag;
-  o.calibrator.heading = HeadingSource::mount_normals;
-  o.calibrator.capture_s = 1.0;
-  BodyTracker tracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
+  BodyTracker tracker = mount_normals_tracker(rig, rig_use_mag);
   tracker.start_calibration(CalibrationPose::npose, 500'000'000);
   std::optional<CalibrationResult> res;
   for (int k = 0; k < 200 && !res; ++k)

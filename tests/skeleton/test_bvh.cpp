@@ -9,6 +9,7 @@
 #include "mocap/skeleton/bvh.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 #include "skeleton_test_util.hpp"
+#include "take_test_util.hpp"
 
 namespace mocap {
 namespace {
@@ -39,23 +40,12 @@ TEST(Bvh, EulerZxyRoundTrip) {
 }
 
 TEST(Bvh, WriterFormatAndRoundTrip) {
-  std::mt19937 rng(22);
   const BodyModel model(BodyModelConfig{1.68});
-  Skeleton sk(model, default_joint_limits(), RigMapping::full());
   const std::string path = std::string(MOCAP_BINARY_DIR) + "/test_bvh_roundtrip.bvh";
   std::vector<PoseFrame> frames;
   {
     BvhWriter w(path, model, {.frame_time_s = 0.01});
-    for (int k = 0; k < 25; ++k) {
-      const auto pose = test::random_pose(rng, 50);
-      for (int s = 0; s < kSegmentCount; ++s)
-        sk.set_sensor_orientation(s, pose[s], k * 10'000'000LL);
-      PoseFrame f;
-      reset_pose(f);
-      sk.solve(f);
-      w.write_frame(f);
-      frames.push_back(f);
-    }
+    frames = test::write_random_take(w, model, 25, 22, 50, 10'000'000);
     EXPECT_EQ(w.frames(), 25);
   }
   const std::string text = read_file(path);

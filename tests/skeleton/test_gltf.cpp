@@ -9,8 +9,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "gltf_test_util.hpp"
 #include "mocap/skeleton/bvh.hpp"
+#include "take_test_util.hpp"
 
 namespace mocap {
 namespace {

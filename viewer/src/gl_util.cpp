@@ -1,4 +1,4 @@
-// GLFW initialisation, window creation and shader compilation.
+// GLFW initialisation, window creation, shader compilation and instance attributes.
 #include "mocap/viewer/gl_util.hpp"
 
 #include <cstdio>
@@ -12,20 +12,28 @@ void print_glfw_error(int code, const char* description) {
   std::fprintf(stderr, "mocap-viewer: GLFW error %d: %s\n", code, description);
 }
 
+/// Throws "<what>: <info log>" if the shader's or program's `status` is false, deleting it
+/// first (get_iv, get_log, destroy: glGetShaderiv, glGetShaderInfoLog, glDeleteShader or the
+/// program ones).
+template <class GetIv, class GetLog, class Destroy>
+void throw_unless(GLuint object, GLenum status, GetIv get_iv, GetLog get_log, Destroy destroy,
+                  const std::string& what) {
+  GLint ok = 0;
+  get_iv(object, status, &ok);
+  if (ok) return;
+  char log[2048] = {};
+  get_log(object, sizeof log, nullptr, log);
+  destroy(object);
+  throw std::runtime_error(what + ": " + log);
+}
+
 GLuint compile(GLenum type, const char* src, const char* what) {
   const GLuint s = glCreateShader(type);
   glShaderSource(s, 1, &src, nullptr);
   glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    glDeleteShader(s);
-    throw std::runtime_error(std::string(what) +
-                             (type == GL_VERTEX_SHADER ? " vertex" : " fragment") +
-                             " shader: " + log);
-  }
+  throw_unless(
+      s, GL_COMPILE_STATUS, glGetShaderiv, glGetShaderInfoLog, glDeleteShader,
+      std::string(what) + (type == GL_VERTEX_SHADER ? " vertex" : " fragment") + " shader");
   return s;
 }
 
@@ -71,15 +79,15 @@ GLuint make_program(const char* vertex_src, const char* fragment_src, const char
   glLinkProgram(p);
   glDeleteShader(vs);
   glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {};
-    glGetProgramInfoLog(p, sizeof log, nullptr, log);
-    glDeleteProgram(p);
-    throw std::runtime_error(std::string(what) + " program link: " + log);
-  }
+  throw_unless(p, GL_LINK_STATUS, glGetProgramiv, glGetProgramInfoLog, glDeleteProgram,
+               std::string(what) + " program link");
   return p;
+}
+
+void instance_attribute(GLuint index, GLint size, GLsizei stride, std::size_t offset) {
+  glVertexAttribPointer(index, size, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(offset));
+  glEnableVertexAttribArray(index);
+  glVertexAttribDivisor(index, 1);
 }
 
 std::string gl_renderer_name() {

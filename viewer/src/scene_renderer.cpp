@@ -174,16 +174,9 @@ SceneRenderer::Mesh SceneRenderer::make_capsule_mesh(int slices, int rings) {
                indices.data(), GL_STATIC_DRAW);
   glBindBuffer(GL_ARRAY_BUFFER, instance_vbo_);
   const GLsizei stride = sizeof(CapsuleInstance);
-  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, stride,
-                        reinterpret_cast<void*>(offsetof(CapsuleInstance, a_m)));
-  glVertexAttribPointer(3, 4, GL_FLOAT, GL_FALSE, stride,
-                        reinterpret_cast<void*>(offsetof(CapsuleInstance, b_m)));
-  glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, stride,
-                        reinterpret_cast<void*>(offsetof(CapsuleInstance, rgba)));
-  for (GLuint a = 2; a <= 4; ++a) {
-    glEnableVertexAttribArray(a);
-    glVertexAttribDivisor(a, 1);
-  }
+  instance_attribute(2, 4, stride, offsetof(CapsuleInstance, a_m));
+  instance_attribute(3, 4, stride, offsetof(CapsuleInstance, b_m));
+  instance_attribute(4, 4, stride, offsetof(CapsuleInstance, rgba));
   glBindVertexArray(0);
   return m;
 }

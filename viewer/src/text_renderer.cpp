@@ -65,16 +65,9 @@ TextRenderer::TextRenderer() {
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(kMaxGlyphs * sizeof(Glyph)), nullptr,
                GL_STREAM_DRAW);
   const GLsizei stride = sizeof(Glyph);
-  glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, stride,
-                        reinterpret_cast<void*>(offsetof(Glyph, x)));
-  glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, stride,
-                        reinterpret_cast<void*>(offsetof(Glyph, cell)));
-  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, stride,
-                        reinterpret_cast<void*>(offsetof(Glyph, rgba)));
-  for (GLuint a = 0; a < 3; ++a) {
-    glEnableVertexAttribArray(a);
-    glVertexAttribDivisor(a, 1);
-  }
+  instance_attribute(0, 4, stride, offsetof(Glyph, x));
+  instance_attribute(1, 1, stride, offsetof(Glyph, cell));
+  instance_attribute(2, 4, stride, offsetof(Glyph, rgba));
   glBindVertexArray(0);
 }
 

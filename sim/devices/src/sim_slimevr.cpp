@@ -15,10 +15,9 @@
 
 #include "mocap/core/time.hpp"
 #include "mocap/devsim/sim_device.hpp"
+#include "mocap/drivers/transport.hpp"
 
 namespace mocap {
-
-bool split_host_port(const std::string& hp, std::string& host, std::string& port, std::string& err);
 
 namespace slime_sim {
 namespace {

@@ -7,10 +7,9 @@
 #include <stdexcept>
 
 #include "mocap/devsim/sim_encoder.hpp"
+#include "mocap/drivers/transport.hpp"
 
 namespace mocap {
-
-bool split_host_port(const std::string& hp, std::string& host, std::string& port, std::string& err);
 
 UdpSender::UdpSender(const std::string& host_port) {
   std::string host, port, err;

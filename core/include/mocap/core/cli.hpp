@@ -25,7 +25,8 @@ CLI::App* add_command(CLI::App& parent, const std::string& name, const std::stri
 CLI::Option* add_multi(CLI::App& app, const std::string& name, std::vector<std::string>& values,
                        const std::string& description);
 
-/// Makes `alias` a deprecated spelling of `canonical`: hidden from help, warns when used, not
+/// Makes `alias` a deprecated spelling of `canonical`: hidden from help (not named in
+/// canonical's either), warns when used, a usage error ("ALIAS excludes CANONICAL") together
 /// with `canonical`. Returns `alias`.
 CLI::Option* deprecate_alias(CLI::App& app, CLI::Option* alias, CLI::Option* canonical);
 

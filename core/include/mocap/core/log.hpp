@@ -2,6 +2,7 @@
 // logs (no global state); each device gets its own child with its own level.
 #pragma once
 
+#include <array>
 #include <cstdio>
 #include <mutex>
 #include <string>
@@ -11,9 +12,15 @@ namespace mocap {
 
 enum class LogLevel { trace, debug, info, warn, error, off };
 
+/// The levels' names, in LogLevel order: the one list that log lines, the configuration
+/// (`daemon.log_level`, a sensor's `log_level`) and its reference read.
+inline constexpr std::array<std::string_view, 6> kLogLevelNames = {"trace", "debug", "info",
+                                                                   "warn",  "error", "off"};
+static_assert(kLogLevelNames.size() == static_cast<std::size_t>(LogLevel::off) + 1);
+
 std::string_view to_string(LogLevel l);
-/// Parses "trace|debug|info|warn|error|off"; returns false if unknown.
-bool parse_log_level(std::string_view s, LogLevel& out);
+/// kLogLevelNames as one list, "trace, debug, info, warn, error, off".
+std::string_view log_level_choices();
 
 /// Where log lines go (shared by all Loggers of one process; serialises writes).
 class LogSink {

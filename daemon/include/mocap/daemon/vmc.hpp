@@ -41,26 +41,18 @@ bool vmc_pose_from_frame(const PoseFrame& frame, VmcPose& out) noexcept;
 
 class VmcSender {
  public:
-  struct Options {
-    std::string host = "127.0.0.1";   ///< IPv4 address of the receiver (Marionette)
-    uint16_t port = 39539;            ///< VMC receivers listen here by convention
-    int min_interval_ms = 10;         ///< frames closer than this are skipped (<= 100 Hz)
+  /// host: the receiver (Marionette); VMC receivers listen on 39539 by convention.
+  struct Options : osc::SenderOptions<39539> {
     std::size_t max_datagram = 1500;  ///< bundle size limit (VMC spec)
   };
-  struct Stats {
-    uint64_t frames_sent = 0;
-    uint64_t frames_rate_limited = 0;  ///< skipped by min_interval_ms
-    uint64_t frames_invalid = 0;       ///< skipped: non-finite values
+  /// send_errors counts datagrams.
+  struct Stats : osc::FrameStats {
     uint64_t datagrams_sent = 0;
-    uint64_t send_errors = 0;  ///< sendto failures (e.g. EAGAIN); the frame is lost
     std::size_t max_datagram_bytes = 0;
   };
 
-  VmcSender() = default;
-  VmcSender(const VmcSender&) = delete;
-  VmcSender& operator=(const VmcSender&) = delete;
-
-  /// Creates the UDP socket. False with a message if the address is invalid.
+  /// Creates the UDP socket to the VMC receiver (not copyable: it owns it). False with a message if
+  /// the address is invalid.
   bool open(const Options& options, std::string* error);
   /// Pipeline thread: encodes and sends one frame (non-blocking sendto, no allocation).
   /// Frame time (t_ns) drives the rate limit and /VMC/Ext/T.
@@ -69,10 +61,8 @@ class VmcSender {
 
  private:
   Options options_;
-  osc::UdpTarget udp_;
-  int64_t last_t_ns_ = 0;
+  osc::FrameTarget target_;
   int64_t first_t_ns_ = 0;
-  bool sent_any_ = false;
   uint8_t bundle_[1500];
   uint8_t message_[256];
   std::size_t bundle_cap_ = sizeof bundle_;

@@ -37,10 +37,8 @@ bool vrchat_tracker_from_frame(const PoseFrame& frame, int segment, double scale
 
 class VrchatSender {
  public:
-  struct Options {
-    std::string host = "127.0.0.1";  ///< IPv4 address of VRChat (a Quest on the LAN)
-    uint16_t port = 9000;            ///< VRChat's OSC input port
-    int min_interval_ms = 10;        ///< frames closer than this are skipped (<= 100 Hz)
+  /// host: VRChat's (a Quest on the LAN); 9000 is VRChat's OSC input port.
+  struct Options : osc::SenderOptions<9000> {
     /// Segment index per tracker slot 1..8; -1 leaves the slot unsent.
     std::array<int, kVrchatTrackerSlots> slots{
         index(Segment::pelvis),    index(Segment::torso),    index(Segment::foot_l),
@@ -49,19 +47,13 @@ class VrchatSender {
     bool head = true;    ///< also send /tracking/trackers/head/position|rotation
     double scale = 1.0;  ///< positions are multiplied by this (user height / model height)
   };
-  struct Stats {
-    uint64_t frames_sent = 0;
-    uint64_t frames_rate_limited = 0;  ///< skipped by min_interval_ms
-    uint64_t frames_invalid = 0;       ///< skipped: non-finite values
-    uint64_t messages_sent = 0;        ///< one UDP datagram per OSC message
-    uint64_t send_errors = 0;          ///< sendto failures (e.g. EAGAIN); the message is lost
+  /// send_errors counts messages.
+  struct Stats : osc::FrameStats {
+    uint64_t messages_sent = 0;  ///< one UDP datagram per OSC message
   };
 
-  VrchatSender() = default;
-  VrchatSender(const VrchatSender&) = delete;
-  VrchatSender& operator=(const VrchatSender&) = delete;
-
-  /// Creates the UDP socket. False with a message if the address is invalid.
+  /// Creates the UDP socket to VRChat (not copyable: it owns it). False with a message if
+  /// the address is invalid.
   bool open(const Options& options, std::string* error);
   /// Pipeline thread: encodes and sends one frame, each OSC message as its own datagram
   /// (non-blocking sendto, no allocation). The frame time drives the rate limit.
@@ -70,9 +62,7 @@ class VrchatSender {
 
  private:
   Options options_;
-  osc::UdpTarget udp_;
-  int64_t last_t_ns_ = 0;
-  bool sent_any_ = false;
+  osc::FrameTarget target_;
   uint8_t message_[128];
   Stats stats_;
 };

@@ -55,6 +55,8 @@ std::unique_ptr<ByteTransport> open_serial(const SerialOptions& opt, std::string
 
 /// Binds a UDP socket to "HOST:PORT" (HOST may be 0.0.0.0 or a name). nullptr + err on failure.
 std::unique_ptr<ByteTransport> open_udp(const std::string& host_port, std::string& err);
+/// Splits "HOST:PORT" (HOST may be empty or [bracketed]); false with the reason in err.
+bool split_host_port(const std::string& hp, std::string& host, std::string& port, std::string& err);
 
 /// Opens a HID device by ids ("VID:PID[:SERIAL]" hex). nullptr + err on failure.
 std::unique_ptr<ByteTransport> open_hid(const std::string& ids, std::string& err);
