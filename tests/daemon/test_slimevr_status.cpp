@@ -159,7 +159,7 @@ TEST(SlimeVrStatus, BatteryAndSignalOfASimulatedTrackerReachMocapctlStatus) {
     reported = a && b && a->contains("battery_pct") && a->contains("rssi_dbm") &&
                b->contains("temperature_c") && (*a)["state"] == "streaming";
   }
-  ASSERT_TRUE(reported) << st.dump() << test::slurp((dir / "mocapd.log.err").string());
+  ASSERT_TRUE(reported) << st.dump() << test::slurp_file((dir / "mocapd.log.err").string());
   for (const char* name : {"pelvis", "thigh_l"}) {
     const nlohmann::json& s = *sensor(st, name);
     EXPECT_DOUBLE_EQ(s["battery_pct"].get<double>(), 80) << name;
@@ -199,6 +199,6 @@ TEST(SlimeVrStatus, BatteryAndSignalOfASimulatedTrackerReachMocapctlStatus) {
   EXPECT_TRUE(gone) << st.dump();
   if (const auto* a = sensor(st, "pelvis")) EXPECT_DOUBLE_EQ((*a)["battery_pct"].get<double>(), 80);
   kill(d, SIGTERM);
-  EXPECT_EQ(test::wait_exit(d), 0) << test::slurp((dir / "mocapd.log.err").string());
+  EXPECT_EQ(test::wait_exit(d), 0) << test::slurp_file((dir / "mocapd.log.err").string());
   fs::remove_all(dir);
 }
