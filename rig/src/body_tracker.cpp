@@ -212,14 +212,15 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
   const auto known = [&](int s) {
     return rig.tracked(s) && (!own[s] || r.heading_from_own_normal[s]);
   };
+  const auto known_above = [&](int s) {
+    int p = kSegmentParent[s];
+    while (p >= 0 && !known(p))
+      p = kSegmentParent[p];
+    return p;
+  };
   if (opt_.calibrator.heading == HeadingSource::mount_normals)
-    for (int s = 0; s < kSegmentCount; ++s) {
-      if (!rig.tracked(s) || known(s)) continue;
-      int p = kSegmentParent[s];
-      while (p >= 0 && !known(p))
-        p = kSegmentParent[p];
-      reference[s] = p;
-    }
+    for (int s = 0; s < kSegmentCount; ++s)
+      if (rig.tracked(s) && !known(s)) reference[s] = known_above(s);
   // Segments aligned from their own horizontal site normal are refined against the same
   // evidence, within a band (a strap tilted off the normal turns that alignment). Not the upper
   // arms: the shoulder girdle moves on the torso, which the model holds rigid, so the shoulder's
@@ -231,12 +232,8 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
     for (int s = 0; s < kSegmentCount; ++s) {
       if (!known(s) || !own[s] || !r.heading_from_own_normal[s]) continue;
       if (s == index(Segment::upper_arm_l) || s == index(Segment::upper_arm_r)) continue;
-      int p = kSegmentParent[s];
-      while (p >= 0 && !known(p))
-        p = kSegmentParent[p];
-      if (p < 0) continue;
-      reference[s] = p;
-      refine_[s] = true;
+      reference[s] = known_above(s);
+      refine_[s] = reference[s] >= 0;
     }
   heading_.reset(reference);
   // Joint accelerations pair a segment with its parent or, through the neck (never tracked,
