@@ -113,9 +113,10 @@ TEST(TomlTextCheck, TomlPlusPlusReadsAsciiOnly) {
                         &out));
   EXPECT_EQ(out, "a = \"x\\\\\\\"\\u00E9\" # ?\nb = \"\\U0001F600\"\nc = \"\"\"\\u00E9\"\"\"\n");
   const std::string fuzzed = "v = 2is_reme~z='''2=hz00s\xC3\xA9 t=/dev/pts/1\n";
-  if (!toml_text_problem(fuzzed, &out))
+  if (!toml_text_problem(fuzzed, &out)) {
     for (char ch : out)
       EXPECT_LT(static_cast<unsigned char>(ch), 0x80) << out;
+  }
 }
 
 }  // namespace

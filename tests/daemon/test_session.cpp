@@ -152,7 +152,9 @@ TEST(Session, TruncationAtEveryByteKeepsTheWholeBlocksBefore) {
   for (std::size_t cut = 0; cut < header_end; ++cut) {
     SessionReader r;
     EXPECT_EQ(r.open_bytes({bytes.data(), cut}, &err), cut >= primary) << cut;
-    if (cut >= primary) EXPECT_FALSE(r.next(b));
+    if (cut >= primary) {
+      EXPECT_FALSE(r.next(b));
+    }
   }
 }
 

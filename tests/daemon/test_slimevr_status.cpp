@@ -197,7 +197,9 @@ TEST(SlimeVrStatus, BatteryAndSignalOfASimulatedTrackerReachMocapctlStatus) {
   }
   EXPECT_TRUE(stale);
   EXPECT_TRUE(gone) << st.dump();
-  if (const auto* a = sensor(st, "pelvis")) EXPECT_DOUBLE_EQ((*a)["battery_pct"].get<double>(), 80);
+  if (const auto* a = sensor(st, "pelvis")) {
+    EXPECT_DOUBLE_EQ((*a)["battery_pct"].get<double>(), 80);
+  }
   kill(d, SIGTERM);
   EXPECT_EQ(test::wait_exit(d), 0) << test::slurp_file((dir / "mocapd.log.err").string());
   fs::remove_all(dir);

@@ -11,20 +11,12 @@
 #include "mocap/devsim/sim_transport.hpp"
 #include "mocap/drivers/slimevr.hpp"
 #include "mocap/drivers/slimevr_hid.hpp"
+#include "slimevr_test_util.hpp"
 
 namespace mocap {
 namespace {
 
 namespace sv = slimevr;
-
-std::vector<uint8_t> record(const std::vector<uint8_t>& datagram, uint32_t ip = 0x7f000001,
-                            uint16_t port = 40000) {
-  std::vector<uint8_t> r = {static_cast<uint8_t>(ip >> 24),  static_cast<uint8_t>(ip >> 16),
-                            static_cast<uint8_t>(ip >> 8),   static_cast<uint8_t>(ip),
-                            static_cast<uint8_t>(port >> 8), static_cast<uint8_t>(port)};
-  r.insert(r.end(), datagram.begin(), datagram.end());
-  return r;
-}
 
 sv::Mac mac_of(const char* text) {
   sv::Mac m{};
@@ -134,26 +126,26 @@ TEST(SlimeVrDecoder, MapsMacAndSensorIdToTheRigSensorAndCarriesTheOrientation) {
   const Eigen::Quaterniond q(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitY()));
   // Data before any handshake: the board is unknown, nothing is emitted.
   slime_sim::rotation(1, 1, q, d);
-  dec->feed(record(d), 1'000'000, sink);
+  dec->feed(test::slimevr_record(d), 1'000'000, sink);
   EXPECT_EQ(sink.count(), 0u);
   d.clear();
   slime_sim::handshake(mac_of("02:5E:00:00:00:01"), d);
-  dec->feed(record(d), 2'000'000, sink);
+  dec->feed(test::slimevr_record(d), 2'000'000, sink);
   for (uint64_t n : {1, 2}) {
     d.clear();
     slime_sim::acceleration(2 * n, 1, Eigen::Vector3d(1, 0, 0), d);
-    dec->feed(record(d), 3'000'000 + n, sink);
+    dec->feed(test::slimevr_record(d), 3'000'000 + n, sink);
     d.clear();
     slime_sim::rotation(2 * n + 1, 1, q, d);
-    dec->feed(record(d), 4'000'000 + n, sink);
+    dec->feed(test::slimevr_record(d), 4'000'000 + n, sink);
   }
   // Sensor 0 of this board is not in the rig; a stale (reordered) packet number is dropped.
   d.clear();
   slime_sim::rotation(9, 0, q, d);
-  dec->feed(record(d), 5'000'000, sink);
+  dec->feed(test::slimevr_record(d), 5'000'000, sink);
   d.clear();
   slime_sim::rotation(4, 1, q, d);
-  dec->feed(record(d), 6'000'000, sink);
+  dec->feed(test::slimevr_record(d), 6'000'000, sink);
   const auto s = sink.snapshot();
   ASSERT_EQ(s.size(), 2u);
   EXPECT_EQ(s[0].sensor_id, 7);

@@ -11,6 +11,7 @@
 #include "mocap/devsim/sim_slimevr.hpp"
 #include "mocap/drivers/slimevr.hpp"
 #include "mocap/drivers/slimevr_hid.hpp"
+#include "slimevr_test_util.hpp"
 
 namespace mocap {
 namespace {
@@ -179,12 +180,6 @@ TEST(SlimeVrHidTelemetry, TheDecoderReportsEachTrackersTelemetryWhenItChanges) {
   EXPECT_EQ(sink.telemetry_snapshot().size(), before);
 }
 
-std::vector<uint8_t> record(const std::vector<uint8_t>& datagram) {
-  std::vector<uint8_t> r = {127, 0, 0, 1, 0x9c, 0x40};  // 127.0.0.1:40000
-  r.insert(r.end(), datagram.begin(), datagram.end());
-  return r;
-}
-
 TEST(SlimeVrUdpTelemetry, BatterySignalAndTemperaturePacketsParse) {
   std::vector<uint8_t> d;
   slime_sim::battery(7, 3.7, 0.8, d);
@@ -227,7 +222,7 @@ TEST(SlimeVrUdpTelemetry, TheDecoderGivesEachSensorItsBoardsAndItsOwnFacts) {
   std::vector<uint8_t> d;
   int64_t t = 1'000'000'000;
   const auto feed = [&] {
-    dec->feed(record(d), t += 10'000'000, sink);
+    dec->feed(test::slimevr_record(d), t += 10'000'000, sink);
     d.clear();
   };
   slime_sim::handshake(mac, d);

@@ -86,6 +86,9 @@ std::vector<std::string> keys_of(const nlohmann::ordered_json& j, size_t n) {
   return k;
 }
 
+}  // namespace
+
+// Outside the anonymous namespace: gtest derives each test from it.
 class RunReports : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -96,8 +99,6 @@ class RunReports : public ::testing::Test {
   std::string path(const char* name) const { return (dir_ / name).string(); }
   fs::path dir_;
 };
-
-}  // namespace
 
 TEST_F(RunReports, ReplayAndExportPrintTheSameSummary) {
   const std::string session = std::string(MOCAP_SOURCE_DIR) + "/tests/data/demo_direct_50hz.mcap";

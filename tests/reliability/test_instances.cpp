@@ -193,7 +193,9 @@ TEST(Instances, ASharedPostureCreatedByAnotherUserIsRefused) {
   {  // "another user" prepared it world-readable (as root we can also give it away)
     std::ofstream(path) << "";
     ASSERT_EQ(::chmod(path.c_str(), 0666), 0);
-    if (::geteuid() == 0) ASSERT_EQ(::chown(path.c_str(), 65534, 65534), 0);
+    if (::geteuid() == 0) {
+      ASSERT_EQ(::chown(path.c_str(), 65534, 65534), 0);
+    }
   }
   std::string out;
   const int code = run_mocapd(dir, "foreign",

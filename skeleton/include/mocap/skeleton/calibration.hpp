@@ -99,7 +99,11 @@ struct CalibratorOptions {
   double explicit_heading_deg = 0;                                 ///< for explicit_heading
   /// mount_normals: the outward normal of each segment's sensor site in the body frame (in the
   /// calibration pose); zero = unknown (segment not used for the heading).
-  std::array<Eigen::Vector3d, kSegmentCount> mount_normal_body{};
+  std::array<Eigen::Vector3d, kSegmentCount> mount_normal_body = [] {
+    std::array<Eigen::Vector3d, kSegmentCount> zero;  // Eigen does not zero on construction
+    zero.fill(Eigen::Vector3d::Zero());
+    return zero;
+  }();
   /// Segments whose sensor's filter has a heading frame of its own (no magnetometer: 6D rigs,
   /// or a sensor that sends none). With mount_normals each such sensor's heading is aligned on
   /// its own from its site's normal (q_correction) onto the body heading the others agree on (0
