@@ -1,9 +1,13 @@
-// Test helper shared by the SlimeVR tests: a recorded UDP datagram as the decoder reads it
-// (sender IPv4 address and port, big-endian, then the payload).
+// Test helpers shared by the SlimeVR tests: a recorded UDP datagram as the decoder reads it
+// (sender IPv4 address and port, big-endian, then the payload), and a receiver dongle's decoder
+// with two trackers mapped.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
+
+#include "mocap/drivers/device.hpp"
 
 namespace mocap::test {
 
@@ -14,6 +18,16 @@ inline std::vector<uint8_t> slimevr_record(const std::vector<uint8_t>& datagram,
                             static_cast<uint8_t>(port >> 8), static_cast<uint8_t>(port)};
   r.insert(r.end(), datagram.begin(), datagram.end());
   return r;
+}
+
+/// The HID receiver's decoder, trackers ...:A0 sensor 0 -> rig sensor 4, ...:A1 -> 5.
+inline std::unique_ptr<StreamDecoder> slimevr_dongle_decoder() {
+  DeviceSpec spec;
+  spec.name = "dongle";
+  spec.protocol = "slimevr_hid";
+  spec.port = "hid:1209:7690";
+  spec.options["trackers"] = "02:5E:00:00:00:A0/0=4;02:5E:00:00:00:A1/0=5";
+  return make_decoder(spec);
 }
 
 }  // namespace mocap::test

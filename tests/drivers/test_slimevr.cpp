@@ -318,12 +318,7 @@ TEST(SlimeVrHid, ParsesPacketsWithOrWithoutAReportIdAndSkipsPadding) {
 }
 
 TEST(SlimeVrHid, TrackersAppearByAddressStreamAndLeave) {
-  DeviceSpec spec;
-  spec.name = "dongle";
-  spec.protocol = "slimevr_hid";
-  spec.port = "hid:1209:7690";
-  spec.options["trackers"] = "02:5E:00:00:00:A0/0=4;02:5E:00:00:00:A1/0=5";
-  auto dec = make_decoder(spec);
+  auto dec = test::slimevr_dongle_decoder();
   auto two = make_encoder("slimevr_hid", {.rate_hz = 100, .options = {{"trackers", "2"}}});
   auto one = make_encoder("slimevr_hid", {.rate_hz = 100, .options = {{"trackers", "1"}}});
   auto motion = make_motion("rotate");

@@ -147,12 +147,7 @@ TEST(SlimeVrHidTelemetry, TypesTwoToSevenInTheFirmwaresLayouts) {
 }
 
 TEST(SlimeVrHidTelemetry, TheDecoderReportsEachTrackersTelemetryWhenItChanges) {
-  DeviceSpec spec;
-  spec.name = "dongle";
-  spec.protocol = "slimevr_hid";
-  spec.port = "hid:1209:7690";
-  spec.options["trackers"] = "02:5E:00:00:00:A0/0=4;02:5E:00:00:00:A1/0=5";
-  auto dec = make_decoder(spec);
+  auto dec = test::slimevr_dongle_decoder();
   test::CollectSink sink;
   dec->feed(report({&kRegister, &kInfo, &kCompact, &kStatusPacket}), 1'000'000'000, sink);
   dec->feed(report({&kRuntime, &kButton, &kButtonQuat}), 1'010'000'000, sink);
