@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "mocap/drivers/device.hpp"
@@ -20,14 +21,20 @@ inline std::vector<uint8_t> slimevr_record(const std::vector<uint8_t>& datagram,
   return r;
 }
 
-/// The HID receiver's decoder, trackers ...:A0 sensor 0 -> rig sensor 4, ...:A1 -> 5.
-inline std::unique_ptr<StreamDecoder> slimevr_dongle_decoder() {
+/// A SlimeVR decoder ("slimevr": UDP, "slimevr_hid": the receiver dongle) with the `trackers`
+/// option (MAC/sensor id = rig sensor, as in a rig file).
+inline std::unique_ptr<StreamDecoder> slimevr_decoder(const char* protocol, const char* trackers) {
   DeviceSpec spec;
-  spec.name = "dongle";
-  spec.protocol = "slimevr_hid";
-  spec.port = "hid:1209:7690";
-  spec.options["trackers"] = "02:5E:00:00:00:A0/0=4;02:5E:00:00:00:A1/0=5";
+  spec.name = "slime";
+  spec.protocol = protocol;
+  if (std::string(protocol) == "slimevr_hid") spec.port = "hid:1209:7690";
+  spec.options["trackers"] = trackers;
   return make_decoder(spec);
+}
+
+/// The receiver dongle's decoder, trackers ...:A0 sensor 0 -> rig sensor 4, ...:A1 -> 5.
+inline std::unique_ptr<StreamDecoder> slimevr_dongle_decoder() {
+  return slimevr_decoder("slimevr_hid", "02:5E:00:00:00:A0/0=4;02:5E:00:00:00:A1/0=5");
 }
 
 }  // namespace mocap::test

@@ -116,11 +116,7 @@ TEST(SlimeVrParser, ServerPackets) {
 }
 
 TEST(SlimeVrDecoder, MapsMacAndSensorIdToTheRigSensorAndCarriesTheOrientation) {
-  DeviceSpec spec;
-  spec.name = "slime";
-  spec.protocol = "slimevr";
-  spec.options["trackers"] = "02:5E:00:00:00:01/1=7;02:5E:00:00:00:02/0=3@-y,x,z";
-  auto dec = make_decoder(spec);
+  auto dec = test::slimevr_decoder("slimevr", "02:5E:00:00:00:01/1=7;02:5E:00:00:00:02/0=3@-y,x,z");
   test::CollectSink sink;
   std::vector<uint8_t> d;
   const Eigen::Quaterniond q(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitY()));

@@ -206,11 +206,7 @@ TEST(SlimeVrUdpTelemetry, BatterySignalAndTemperaturePacketsParse) {
 }
 
 TEST(SlimeVrUdpTelemetry, TheDecoderGivesEachSensorItsBoardsAndItsOwnFacts) {
-  DeviceSpec spec;
-  spec.name = "slime";
-  spec.protocol = "slimevr";
-  spec.options["trackers"] = "02:5E:00:00:00:01/0=3;02:5E:00:00:00:01/1=4";
-  auto dec = make_decoder(spec);
+  auto dec = test::slimevr_decoder("slimevr", "02:5E:00:00:00:01/0=3;02:5E:00:00:00:01/1=4");
   test::CollectSink sink;
   sv::Mac mac{};
   ASSERT_TRUE(sv::parse_mac("02:5E:00:00:00:01", mac));
