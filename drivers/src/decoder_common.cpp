@@ -25,16 +25,18 @@ void DecoderCommon::check_range(ImuSample& s) {
   // (dropped). At >= 0.99 x full scale the axis is clipped, or pegged by a glitch (flagged).
   bool implausible = false, saturated = false;
   auto check = [&](const Eigen::Vector3d& v, double full_scale, uint8_t field) {
-    if (!(s.valid & field)) return;
+    if (!(s.valid & field)) return false;
     const double m = v.cwiseAbs().maxCoeff();
     if (m > 1.1 * full_scale) {
       s.valid &= static_cast<uint8_t>(~field);
       implausible = true;
     } else if (m >= 0.99 * full_scale) {
       saturated = true;
+      return true;
     }
+    return false;
   };
-  check(s.gyr_rad_s, gyr_max_rad_s_, kFieldGyr);
+  if (check(s.gyr_rad_s, gyr_max_rad_s_, kFieldGyr)) s.flags |= kFlagGyrClipped;
   check(s.acc_m_s2, acc_max_m_s2_, kFieldAcc);
   if (implausible) s.flags |= kFlagImplausible, ++stats.implausible;
   if (saturated) s.flags |= kFlagSaturated, ++stats.saturated;

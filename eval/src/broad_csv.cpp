@@ -1,6 +1,9 @@
 // Parses BROAD-layout IMU CSVs (plain or gzip) with line-precise error messages.
 #include "mocap/eval/broad_csv.hpp"
 
+#include "mocap/core/imu_sample.hpp"
+#include "mocap/core/units.hpp"
+
 #include <zlib.h>
 
 #include <algorithm>
@@ -194,6 +197,20 @@ std::vector<std::string> list_broad_trials(const std::string& dir) {
 
 std::string default_broad_dir() {
   return MOCAP_BROAD_DIR;
+}
+
+size_t clip_gyro(BroadTrial& trial, double range_dps) {
+  const double max_rad_s = range_dps * kRadPerDeg;
+  trial.flags.resize(trial.size(), 0);
+  size_t clipped = 0;
+  for (size_t i = 0; i < trial.size(); ++i) {
+    Eigen::Vector3d& g = trial.gyr_rad_s[i];
+    if (g.cwiseAbs().maxCoeff() < max_rad_s) continue;
+    g = g.cwiseMax(-max_rad_s).cwiseMin(max_rad_s);
+    trial.flags[i] |= kFlagSaturated | kFlagGyrClipped;
+    ++clipped;
+  }
+  return clipped;
 }
 
 }  // namespace mocap

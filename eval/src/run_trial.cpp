@@ -40,6 +40,7 @@ ImuSample trial_sample(const BroadTrial& trial, size_t i, FilterMode mode) {
   s.t_device_ns = s.t_host_ns;
   s.seq = static_cast<uint32_t>(i);
   s.valid = kFieldGyr | kFieldAcc;
+  if (i < trial.flags.size()) s.flags = trial.flags[i];
   s.gyr_rad_s = trial.gyr_rad_s[i];
   s.acc_m_s2 = trial.acc_m_s2[i];
   if (mode == FilterMode::k9d && trial.has_mag) {

@@ -65,6 +65,8 @@ void AttitudeFilter::refresh_coeffs() {
   c_.hard_iron.k_select =
       gain_from_tau(p_.hard_iron.select_tau_s, c_.hard_iron.decim * c_.ts.mag_s);
   c_.mag_latency.k = gain_from_tau(p_.mag_latency.tau_s, c_.ts.mag_s);
+  c_.upset_acc_lp = butterworth(p_.upset.tau_s, c_.ts.acc_s);
+  c_.upset_mag_lp = butterworth(p_.upset.tau_s, c_.ts.mag_s);
   c_.mag_latency.k_hp = gain_from_tau(p_.mag_latency.hp_tau_s, c_.ts.mag_s);
 
   // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
@@ -149,6 +151,9 @@ void AttitudeFilter::update(const ImuSample& s) {
     if (check_vector(s.gyr_rad_s, 0.0, p_.input.max_gyr_rad_s, cnt_) &&
         stream_dt(s.t_host_ns, st_.gyr_timing, dt_s)) {
       ++cnt_.gyr_ok;
+      if (p_.upset.enabled && ((s.flags & kFlagGyrClipped) || s.gyr_rad_s.cwiseAbs().maxCoeff() >=
+                                                                  p_.upset.gyr_deg_s * kRadPerDeg))
+        note_clipped_gyr();
       update_gyr(s.gyr_rad_s, dt_s);
     }
   }
@@ -209,6 +214,7 @@ void AttitudeFilter::update_rest_gyr(const Eigen::Vector3d& gyr) {
 void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   (void)dt_s;
   update_rest_acc(acc);
+  check_upset(acc);
   if (!update_inclination(acc)) return;
   st_.bias.corr_sum += st_.inclination.last_acc_earth.head<2>();
   st_.gyr_gain.gyr_sum_rad_s += st_.strapdown.last_gyr_rad_s;

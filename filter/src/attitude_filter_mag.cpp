@@ -51,6 +51,7 @@ void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const Eigen::Quaterniond q6 = st_.inclination.q_acc * st_.strapdown.q_gyr;
   if (p_.hard_iron.tau_s > 0) update_hard_iron(mag_raw, q6, dt_s);
   const Eigen::Vector3d m_e = mag_to_earth(mag_raw - st_.hard_iron.applied_uT, q6);
+  upset_mag(mag_raw - st_.hard_iron.applied_uT);
   if (p_.mag_dist.rejection) update_mag_disturbance(m_e);
   update_heading(m_e, dt_s);
 }

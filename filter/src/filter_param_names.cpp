@@ -76,6 +76,15 @@ const Entry kEntries[] = {
     P(max_gyr_rad_s, input, max_gyr_rad_s),
     P(max_acc_m_s2, input, max_acc_m_s2),
     P(max_mag_uT, input, max_mag_uT),
+    P(upset_recovery, upset, enabled),
+    P(upset_gyr_deg_s, upset, gyr_deg_s),
+    P(upset_tau_s, upset, tau_s),
+    P(upset_window_s, upset, window_s),
+    P(upset_angle_deg, upset, angle_deg),
+    P(upset_confirm_deg, upset, confirm_deg),
+    P(upset_steady_deg, upset, steady_deg),
+    P(upset_hold_s, upset, hold_s),
+    P(upset_norm_tol, upset, norm_tol),
 };
 #undef P
 

@@ -131,11 +131,11 @@ void SensorErrorModel::measure(const SensorKinematics& k, const Eigen::Vector3d&
                noise3(p_.mag_noise_uT);
   gyr_bias_rad_s_ += noise3(p_.gyr_bias_walk_dps_rts * kRadPerDeg * std::sqrt(std::max(dt_s, 0.0)));
   const double gyr_max = p_.gyr_range_dps * kRadPerDeg;
-  bool saturated = false;
+  bool saturated = false, gyr_clipped = false;
   for (int i = 0; i < 3; ++i) {
     if (std::abs(out.gyr_rad_s[i]) > gyr_max) {
       out.gyr_rad_s[i] = std::copysign(gyr_max, out.gyr_rad_s[i]);
-      saturated = true;
+      saturated = gyr_clipped = true;
     }
     if (std::abs(out.acc_m_s2[i]) > p_.acc_range_m_s2) {
       out.acc_m_s2[i] = std::copysign(p_.acc_range_m_s2, out.acc_m_s2[i]);
@@ -143,7 +143,8 @@ void SensorErrorModel::measure(const SensorKinematics& k, const Eigen::Vector3d&
     }
   }
   out.valid = kFieldGyr | kFieldAcc | kFieldMag;
-  out.flags = kFlagSynthetic | (saturated ? kFlagSaturated : 0);
+  out.flags =
+      kFlagSynthetic | (saturated ? kFlagSaturated : 0) | (gyr_clipped ? kFlagGyrClipped : 0);
 }
 
 }  // namespace mocap::sim

@@ -30,8 +30,9 @@ TEST(Plausibility, LineSensorGlitchesAreDroppedFlaggedAndCounted) {
   in += sample_line(20'000, 40, 0);  // 40 g then rest
   in += sample_line(30'000, 1, 1995);  // pegged at full scale: kept, flagged saturated
   in += sample_line(40'000, 1, 0.5);
+  in += sample_line(50'000, 15.9, 0);  // acc at full scale: saturated, but no rotation lost
   dec->feed(as_bytes(in), 0, sink);
-  ASSERT_EQ(sink.samples.size(), 5u);
+  ASSERT_EQ(sink.samples.size(), 6u);
   const auto& s = sink.samples;
   EXPECT_EQ(s[0].flags & (kFlagImplausible | kFlagSaturated), 0);
   EXPECT_TRUE(s[1].flags & kFlagImplausible);
@@ -43,9 +44,12 @@ TEST(Plausibility, LineSensorGlitchesAreDroppedFlaggedAndCounted) {
   EXPECT_TRUE(s[3].flags & kFlagSaturated);
   EXPECT_FALSE(s[3].flags & kFlagImplausible);
   EXPECT_TRUE(s[3].has(kFieldGyr));
+  EXPECT_TRUE(s[3].flags & kFlagGyrClipped);  // the filter's cue for upset recovery
   EXPECT_EQ(s[4].flags & (kFlagImplausible | kFlagSaturated), 0);
+  EXPECT_TRUE(s[5].flags & kFlagSaturated);
+  EXPECT_FALSE(s[5].flags & kFlagGyrClipped);
   EXPECT_EQ(dec->stats().implausible, 2u);
-  EXPECT_EQ(dec->stats().saturated, 1u);
+  EXPECT_EQ(dec->stats().saturated, 2u);
   EXPECT_EQ(dec->stats().checksum_errors, 0u);
 }
 

@@ -22,6 +22,7 @@ const VqfRef* vqf_for(const std::string& name) {
 struct EvaluateOptions {
   std::string dir, mode = "9d", algorithm = "default";
   std::vector<std::string> sets;
+  double gyr_range_dps = 0;
   bool quiet = false;
 };
 
@@ -63,6 +64,8 @@ int run_evaluate(const EvaluateOptions& o) {
                    f.c_str());
       return 1;
     }
+    size_t clipped = 0;
+    if (o.gyr_range_dps > 0) clipped = clip_gyro(trial, o.gyr_range_dps);
     run_trial(trial, *alg, *mode, params, est);
     const AttitudeErrors e = score_trial(trial, est);
     sum_t += e.total_deg;
@@ -84,6 +87,7 @@ int run_evaluate(const EvaluateOptions& o) {
                   e.heading_deg - v->heading);
     else if (v)
       std::printf("   %5.2f (%+.2f)", v->incl6, diff);
+    if (o.gyr_range_dps > 0) std::printf("   %zu clipped", clipped);
     std::printf("\n");
   }
   std::printf("%-44s %7.3f %7.3f %7.3f   worst vs VQF: %+.2f (%s)\n",
@@ -108,6 +112,10 @@ void add_evaluate(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember({"default", "ours", "madgwick", "mahony"}));
   cli::add_multi(*c, "--set", o->sets,
                  "override a filter parameter: --set tau_mag_s=12 (ours only)");
+  c->add_option("--gyr-range-dps", o->gyr_range_dps,
+                "read the gyro as a sensor of this full scale would (clipped and flagged): "
+                "how the filter recovers from rotation it could not measure")
+      ->check(CLI::PositiveNumber);
   c->add_flag("--quiet", o->quiet, "print only the mean line");
   c->callback([o, &exit_code] { exit_code = run_evaluate(*o); });
 }

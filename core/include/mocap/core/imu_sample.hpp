@@ -26,6 +26,7 @@ enum SampleFlag : uint8_t {
   kFlagSynthetic = 1u << 3,     ///< produced by a simulator, not hardware
   kFlagInterpolated = 1u << 4,  ///< filled in (e.g. mag held from a slower stream)
   kFlagImplausible = 1u << 5,   ///< a field beyond the sensor's range was dropped (a glitch)
+  kFlagGyrClipped = 1u << 6,  ///< a gyro axis is at its limit (with kFlagSaturated): rotation lost
 };
 
 /// One time instant of one inertial sensor, after unit conversion and axis remapping.

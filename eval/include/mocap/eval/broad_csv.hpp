@@ -21,9 +21,15 @@ struct BroadTrial {
   std::vector<Eigen::Vector3d> gyr_rad_s, acc_m_s2, mag_uT;
   std::vector<Eigen::Vector4d> ref_wxyz;  ///< reference quaternion w,x,y,z (NaN = missing)
   std::vector<uint8_t> movement;
+  /// Per-sample SampleFlag bits (empty: none; clip_gyro sets kFlagGyrClipped).
+  std::vector<uint8_t> flags;
 
   size_t size() const { return t_s.size(); }
 };
+
+/// The gyro as a sensor of full scale +-range_dps would read it: each axis clipped, the sample
+/// flagged (kFlagSaturated | kFlagGyrClipped) as a driver does. Returns the clipped samples.
+size_t clip_gyro(BroadTrial& trial, double range_dps);
 
 /// Parses CSV text. On failure returns false and sets error to "line N: what is wrong".
 /// Required columns: t, gyr_x..z, acc_x..z; optional: mag_x..z, ref_w..z, movement.

@@ -88,6 +88,15 @@ class AttitudeFilter {
   void update_rest_gyr(const Eigen::Vector3d& gyr);
   void update_rest_acc(const Eigen::Vector3d& acc);
   bool update_inclination(const Eigen::Vector3d& acc);
+  // Upset recovery (attitude_filter_upset.cpp).
+  /// A gyro sample at full scale: the strapdown may have lost rotation; the check begins.
+  void note_clipped_gyr();
+  /// The field (hard iron removed) into the check's fast low-pass.
+  void upset_mag(const Eigen::Vector3d& mag);
+  /// The check, with each acc sample: a fresh orientation from fast-low-passed acc (and field)
+  /// against the filter's; a steady disagreement is corrected.
+  void check_upset(const Eigen::Vector3d& acc);
+  void recover_upset(const Eigen::Quaterniond& q_acc, double delta_rad, bool with_heading);
   void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
   void update_gain_regressor(const Eigen::Matrix3d& r6, const Eigen::Vector3d& w, double ts);
   void update_gain(const Eigen::Vector2d& residual, const Eigen::Matrix<double, 2, 9>& reg,

@@ -62,6 +62,7 @@ struct FilterCoeffs {
   MagDisturbanceCoeffs mag_dist;
   HardIronStageCoeffs hard_iron;
   MagLatencyCoeffs mag_latency;
+  LowpassCoeffs upset_acc_lp, upset_mag_lp;  ///< upset recovery's fast low-passes
 };
 
 }  // namespace mocap

@@ -127,6 +127,33 @@ struct InputParams {
   double max_mag_uT = 10000.0;  ///< uT, |mag| above this is rejected
 };
 
+/// Upset recovery (ours). A gyro axis at full scale (the sample's kFlagGyrClipped, or a rate
+/// of at least gyr_deg_s for input without flags) has lost rotation the strapdown cannot know.
+/// The slow paths would take many seconds to find it (inclination: tau_acc_s; heading:
+/// tau_mag_s, and only after the field, whose dip is seen through the wrong inclination, stops
+/// being rejected). So for window_s after a clipped sample a fresh orientation is formed from
+/// acc (and the field) low-passed over tau_s in the almost-inertial frame and compared with the
+/// filter's. Verdicts, each held for hold_s while the fresh orientation turns less than
+/// steady_deg there (a swing's specific force turns; a lost rotation is fixed) and the fast
+/// acc's norm is within norm_tol of g: the inclination lost (off by over angle_deg): set to the
+/// fresh one; with the inclination confirmed (within confirm_deg) and the field passing its
+/// tests, the heading lost (over angle_deg): set to the field's; both confirmed: the check
+/// ends. A recovery also returns the bias filter to its state before the clipped sample and
+/// forgives the field's rejection time. Without a clipped sample nothing changes; the
+/// thresholds are such that checks after every fast motion of the BROAD trials and the CMU
+/// clips change nothing (docs/filter.md).
+struct UpsetParams {
+  bool enabled = true;
+  double gyr_deg_s = 1900;   ///< deg/s, an axis this fast may be clipped (input without flags)
+  double tau_s = 0.3;        ///< s, the fast low-passes of acc and field
+  double window_s = 10.0;    ///< s, longest check after the last clipped sample
+  double angle_deg = 30.0;   ///< deg, smallest disagreement corrected
+  double confirm_deg = 5.0;  ///< deg, largest disagreement that confirms
+  double steady_deg = 5.0;   ///< deg, largest turn of the fresh orientation over hold_s
+  double hold_s = 0.2;       ///< s, a verdict must hold this long
+  double norm_tol = 0.1;     ///< -, largest relative deviation of the fast acc's norm from g
+};
+
 /// Every parameter of AttitudeFilter, by stage.
 struct FilterParams {
   InclinationParams inclination;
@@ -138,6 +165,7 @@ struct FilterParams {
   HardIronParams hard_iron;
   MagLatencyParams mag_latency;
   InputParams input;
+  UpsetParams upset;
 };
 
 }  // namespace mocap

@@ -106,6 +106,23 @@ struct HardIronState {
   bool applied_consistent = false;                       ///< ... by the consistency path
 };
 
+/// Upset recovery: the check after a clipped gyro sample.
+struct UpsetState {
+  bool checking = false;
+  double since_s = 0;   ///< time since the last clipped sample
+  double hold_t_s = 0;  ///< time the current verdict (disagree / agree) has held
+  bool disagree = false;
+  /// The fresh orientation (almost-inertial -> ENU) when the disagreement began to hold.
+  Eigen::Quaterniond q_hold = Eigen::Quaterniond::Identity();
+  Lowpass<3> acc_lp, mag_lp;  ///< fast low-passes, almost-inertial frame, since that sample
+  double mag_t_s = 0;         ///< field time in mag_lp
+  /// The bias estimate and covariance before the first clipped sample of this upset.
+  Eigen::Vector3d bias_before_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d bias_p_before = Eigen::Matrix3d::Zero();
+  bool bias_p_init_before = false;
+  uint32_t recoveries = 0;  ///< orientations reset so far
+};
+
 /// Everything that evolves; can be saved and restored (plain data).
 struct FilterState {
   StreamTiming gyr_timing, acc_timing, mag_timing;
@@ -118,6 +135,7 @@ struct FilterState {
   MagDisturbanceState mag_dist;
   HardIronState hard_iron;
   LatencyEstimator mag_latency;
+  UpsetState upset;
 };
 
 }  // namespace mocap

@@ -50,6 +50,16 @@ struct Lowpass {
 
   void reset() { *this = Lowpass{}; }
 
+  /// Running in steady state at x (as if x had been the input for ever).
+  void set_steady(const double* x, const LowpassCoeffs& c) {
+    init_t_s = -1;
+    for (int i = 0; i < N; ++i) {
+      out[i] = x[i];
+      s0[i] = x[i] * (1.0 - c.b0);
+      s1[i] = x[i] * (c.b2 - c.a2);
+    }
+  }
+
   const std::array<double, N>& step(const double* x, const LowpassCoeffs& c, double tau_s,
                                     double ts_s) {
     if (c.pass) {
@@ -64,13 +74,7 @@ struct Lowpass {
         out[i] = s0[i] / init_n;
       }
       init_t_s += ts_s;
-      if (init_t_s >= tau_s) {
-        for (int i = 0; i < N; ++i) {
-          s0[i] = out[i] * (1.0 - c.b0);
-          s1[i] = out[i] * (c.b2 - c.a2);
-        }
-        init_t_s = -1;
-      }
+      if (init_t_s >= tau_s) set_steady(out.data(), c);
       return out;
     }
     for (int i = 0; i < N; ++i) {
