@@ -18,6 +18,7 @@ namespace {
 struct FilterOptions {
   std::string input, output, mode = "9d", algorithm = "default";
   std::vector<std::string> sets;
+  double gyr_range_dps = 0;
 };
 
 int run_filter(const FilterOptions& o) {
@@ -52,6 +53,7 @@ int run_filter(const FilterOptions& o) {
                  in.c_str());
     return 1;
   }
+  if (o.gyr_range_dps > 0) clip_gyro(trial, o.gyr_range_dps);
   std::vector<Eigen::Quaterniond> q;
   run_trial(trial, *alg, *mode, params, q);
   FILE* f = std::fopen(out_path.c_str(), "w");
@@ -87,6 +89,9 @@ void add_filter(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember({"default", "ours", "madgwick", "mahony"}));
   cli::add_multi(*c, "--set", o->sets,
                  "override a filter parameter: --set tau_mag_s=12 (ours only)");
+  c->add_option("--gyr-range-dps", o->gyr_range_dps,
+                "read the gyro as a sensor of this full scale would (clipped and flagged)")
+      ->check(CLI::PositiveNumber);
   c->callback([o, &exit_code] { exit_code = run_filter(*o); });
 }
 
