@@ -60,16 +60,19 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
   j["alone_mean_deg"] = r.alone_mean_deg;
   {
     nlohmann::json m, a;
-    double worst = -1e9;
+    double worst = -1e9, worst_same_g = -1e9;
     for (int s = 0; s < kSegmentCount; ++s) {
       if (r.alone_segment_deg[s] == 0 && r.metric_segment_deg[s] == 0) continue;
       m[std::string(kSegmentNames[s])] = r.metric_segment_deg[s];
       a[std::string(kSegmentNames[s])] = r.alone_segment_deg[s];
       worst = std::max(worst, r.metric_segment_deg[s] - r.alone_segment_deg[s]);
+      worst_same_g =
+          std::max(worst_same_g, r.metric_segment_alone_g_deg[s] - r.alone_segment_deg[s]);
     }
     j["metric_segment_deg"] = m;
     j["alone_segment_deg"] = a;
     j["worst_segment_excess_deg"] = worst;
+    j["worst_segment_excess_same_g_deg"] = worst_same_g;
   }
   nlohmann::json diag;
   for (int s = 0; s < kSegmentCount; ++s) {

@@ -58,7 +58,8 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       is_source_(sensors_.size(), false),
       q_source_(sensors_.size(), Eigen::Quaterniond::Identity()),
       prev_w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
-      prev_w_t_ns_(sensors_.size(), 0) {}
+      prev_w_t_ns_(sensors_.size(), 0),
+      local_field_fixes_seen_(sensors_.size(), 0) {}
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
   return q_earth_sensor(i, filters_[static_cast<size_t>(i)].output());
@@ -108,6 +109,10 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
   const int seg = sensor.segment;
   if (seg < 0) return;
   const FilterOutput o = f.output();
+  if (o.local_field_fixes != local_field_fixes_seen_[static_cast<size_t>(i)]) {
+    local_field_fixes_seen_[static_cast<size_t>(i)] = o.local_field_fixes;
+    fix_mounting_after_local_field(seg, o.local_field_fix_rad);
+  }
   const Eigen::Quaterniond q = q_earth_sensor(i, o);
   // 3. Calibration capture.
   if (calibrator_.capturing()) {
@@ -116,6 +121,11 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
       calibrator_.set_own_heading_frames(own_heading_frames());
       result_ = calibrator_.finish();
       if (result_->ok()) {
+        for (size_t k = 0; k < sensors_.size(); ++k) {
+          const int sg = sensors_[k].segment;
+          if (sg >= 0 && result_->heading_off_normal_rad[sg] != 0)
+            filters_[k].suspect_local_field(-result_->heading_off_normal_rad[sg]);
+        }
         skeleton_.set_calibration(result_->calibration);
         start_heading_from_motion(*result_);
       }
@@ -311,6 +321,21 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
     changed = true;
   }
   if (changed) skeleton_.set_calibration(c);
+}
+
+// The calibration took this sensor's orientation with the local field's heading; its filter
+// has now turned by turn_rad onto the earth's: the mounting turns alike, as if the
+// calibration had seen the true heading (q_ss' = q_ss B^-1 Rz(-turn) B, B the segment's
+// orientation in the calibration pose).
+void BodyTracker::fix_mounting_after_local_field(int seg, double turn_rad) {
+  Calibration c = skeleton_.calibration();
+  if (seg < 0 || !c.valid || !c.calibrated[seg]) return;
+  const Eigen::Quaterniond b =
+      Eigen::Quaterniond(Eigen::AngleAxisd(c.heading_deg * kRadPerDeg, Eigen::Vector3d::UnitZ())) *
+      q_body_segment_in_pose(c.pose, seg);
+  const Eigen::Quaterniond y(Eigen::AngleAxisd(-turn_rad, Eigen::Vector3d::UnitZ()));
+  c.q_sensor_segment[seg] = (c.q_sensor_segment[seg] * b.conjugate() * y * b).normalized();
+  skeleton_.set_calibration(c);
 }
 
 void BodyTracker::start_calibration(CalibrationPose pose, int64_t t_start_ns) {

@@ -217,6 +217,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   r.segment_mean_rmse_deg = seg_sum / seg_n;
   const SegmentMetric::Result mr = metric.result(), ar = alone_metric.result();
   r.metric_segment_deg = mr.segment_rms_deg;
+  r.metric_segment_alone_g_deg = metric.result(&ar.g).segment_rms_deg;
   r.alone_segment_deg = ar.segment_rms_deg;
   r.metric_mean_deg = mr.mean_deg;
   r.alone_mean_deg = ar.mean_deg;

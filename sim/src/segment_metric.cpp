@@ -30,7 +30,7 @@ void SegmentMetric::add(const Orientations& q_est, const Orientations& q_true) {
   true_.push_back(d_true);
 }
 
-SegmentMetric::Result SegmentMetric::result() const {
+SegmentMetric::Result SegmentMetric::result(const Eigen::Quaterniond* g_given) const {
   Result r;
   r.frames = frames();
   if (est_.empty()) return r;
@@ -51,6 +51,7 @@ SegmentMetric::Result SegmentMetric::result() const {
   if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) d(2, 2) = -1;
   const Eigen::Matrix3d rot = svd.matrixU() * d * svd.matrixV().transpose();
   r.g = h.squaredNorm() > 0 ? Eigen::Quaterniond(rot).normalized() : Eigen::Quaterniond::Identity();
+  if (g_given) r.g = *g_given;
   int n = 0;
   double sum = 0;
   for (int s = 0; s < kSegmentCount; ++s) {

@@ -172,6 +172,7 @@ CalibrationResult Calibrator::finish() {
     if (worst_dev < 0 || dev[i] > dev[worst_dev]) worst_dev = i;
   }
   bool independent_unaligned = false;
+  std::ostringstream local_field;  // sensors whose heading a local field had turned
 
   // Heading of the body.
   double heading_rad = 0;
@@ -279,6 +280,17 @@ CalibrationResult Calibrator::finish() {
             "heading";
         return r;
       }
+      // A sensor off by far more than a strap's tilt may have taken a local field for north
+      // (or the person's pose is turned there, e.g. feet turned out): reported, for its filter
+      // to watch whether the field changes by as much once the sensor moves.
+      for (int i = 0; i < kSegmentCount; ++i) {
+        if (!use[i]) continue;
+        const double off = std::remainder(h_site[i] - heading_rad, 2 * M_PI);
+        if (std::abs(off) <= CalibrationResult::kLocalFieldDeg * kRadPerDeg) continue;
+        r.heading_off_normal_rad[i] = off;
+        local_field << (local_field.tellp() > 0 ? ", " : "") << name(static_cast<Segment>(i)) << " "
+                    << std::lround(off * kDegPerRad) << " deg";
+      }
       break;
     }
     case HeadingSource::arm_swing: {
@@ -344,6 +356,9 @@ CalibrationResult Calibrator::finish() {
     ok << "; furthest from the " << to_string(pose_) << ": "
        << name(static_cast<Segment>(worst_dev)) << " tilted " << dev[worst_dev]
        << " deg (reported only: the tracked motion is unaffected)";
+  if (local_field.tellp() > 0)
+    ok << "; heading off the site normal (a magnet or steel near it, or the pose turned there): "
+       << local_field.str() << " (corrected if the field turns by as much once it moves away)";
   if (independent_unaligned)
     ok << "; no sensor site with a horizontal normal: each 6D sensor keeps its own heading";
   r.message = ok.str();

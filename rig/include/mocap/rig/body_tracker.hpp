@@ -141,6 +141,10 @@ class BodyTracker {
                                 const Eigen::Vector3d& gyro_bias_rad_s);
   void start_heading_from_motion(const CalibrationResult& r);
   void apply_heading_from_motion(int64_t t_ns);
+  /// A filter confirmed a local field at calibration and turned its heading by turn_rad.
+  void fix_mounting_after_local_field(int seg, double turn_rad);
+  /// Per sensor: its filter's local-field fixes last seen.
+  std::vector<uint32_t> local_field_fixes_seen_;
 };
 
 /// The rig mapping (segment -> sensor index) of a sensor list.

@@ -72,6 +72,10 @@ struct AccuracyResult {
   /// same samples through each sensor's own filter, no body model ("filters alone"; in 6D each
   /// aligned once at calibration to its sensor's true heading: the ideal a calibration reaches).
   std::array<double, kSegmentCount> metric_segment_deg{}, alone_segment_deg{};
+  /// The tracker's per-segment figure under the filters-alone world rotation G (one G for both:
+  /// a segment whose motion the tracker left alone scores the same; the metric's own fit per
+  /// estimate lets a correction of one segment move the others' figures).
+  std::array<double, kSegmentCount> metric_segment_alone_g_deg{};
   double metric_mean_deg = 0, alone_mean_deg = 0;
   double root_drift_m = 0;       ///< horizontal pelvis error at the end
   double root_max_error_m = 0;   ///< largest horizontal pelvis error during the motion

@@ -35,8 +35,9 @@ class SegmentMetric {
     double mean_deg = 0;                                    ///< mean over the scored segments
     Eigen::Quaterniond g = Eigen::Quaterniond::Identity();  ///< the fitted world rotation
   };
-  /// Fits G and scores every frame added so far.
-  Result result() const;
+  /// Fits G and scores every frame added so far; with g_given, scores with that G instead (two
+  /// estimates compared segment by segment under one world rotation).
+  Result result(const Eigen::Quaterniond* g_given = nullptr) const;
   int frames() const { return static_cast<int>(est_.size()); }
 
  private:

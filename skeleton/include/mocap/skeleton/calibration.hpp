@@ -132,6 +132,12 @@ struct CalibrationResult {
   /// own_heading_frame segments: the heading alignment came from the segment's own site normal;
   /// false where it was borrowed from a segment above (head, feet), to be found from motion.
   std::array<bool, kSegmentCount> heading_from_own_normal{};
+  /// Sensors sharing the earth frame (magnetometer) whose heading disagreed with their site
+  /// normal by more than kLocalFieldDeg (rad, 0 elsewhere): their filter may have taken a local
+  /// field (a magnet, steel) for north, or the pose is turned there. BodyTracker has the filter
+  /// watch it (AttitudeFilter::suspect_local_field) and fixes the mounting if confirmed.
+  std::array<double, kSegmentCount> heading_off_normal_rad{};
+  static constexpr double kLocalFieldDeg = 20.0;
   std::string message;  ///< human-readable verdict naming the offending segments
   bool ok() const { return status == CalibrationStatus::ok; }
 };
