@@ -121,11 +121,7 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
       calibrator_.set_own_heading_frames(own_heading_frames());
       result_ = calibrator_.finish();
       if (result_->ok()) {
-        for (size_t k = 0; k < sensors_.size(); ++k) {
-          const int sg = sensors_[k].segment;
-          if (sg >= 0 && result_->heading_off_normal_rad[sg] != 0)
-            filters_[k].suspect_local_field(-result_->heading_off_normal_rad[sg]);
-        }
+        suspect_local_fields(*result_);
         skeleton_.set_calibration(result_->calibration);
         start_heading_from_motion(*result_);
       }
@@ -321,6 +317,31 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
     changed = true;
   }
   if (changed) skeleton_.set_calibration(c);
+}
+
+// A sensor the calibration found far off its site normal, whose field looks like the earth's
+// (norm within mag_dist.norm_th of the rig's median: a turned field no test of its own can
+// catch), is handed to its filter to hold and re-check. A field that does not look like the
+// earth's is the filter's own disturbance tests' business.
+void BodyTracker::suspect_local_fields(const CalibrationResult& r) {
+  std::array<double, kSegmentCount> norm{};
+  std::array<double, kSegmentCount> sorted{};
+  int n = 0;
+  for (size_t k = 0; k < sensors_.size(); ++k) {
+    const int sg = sensors_[k].segment;
+    if (sg < 0 || !has_mag_[k] || n >= kSegmentCount) continue;
+    norm[sg] = filters_[k].state().mag_dist.norm_dip[0];
+    sorted[n++] = norm[sg];
+  }
+  if (n == 0) return;
+  std::sort(sorted.begin(), sorted.begin() + n);
+  const double median = sorted[n / 2];
+  for (size_t k = 0; k < sensors_.size(); ++k) {
+    const int sg = sensors_[k].segment;
+    if (sg < 0 || !has_mag_[k] || r.heading_off_normal_rad[sg] == 0) continue;
+    if (std::abs(norm[sg] - median) > opt_.filter.mag_dist.norm_th * median) continue;
+    filters_[k].suspect_local_field(-r.heading_off_normal_rad[sg]);
+  }
 }
 
 // The calibration took this sensor's orientation with the local field's heading; its filter

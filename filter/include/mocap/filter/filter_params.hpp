@@ -73,6 +73,7 @@ struct MagDisturbanceParams {
   /// s, the field's turn out of a suspected local field counts against its value low-passed
   /// over this time (a step as the sensor leaves it, not the 6D frame's slow drift).
   double local_field_step_s = 3.0;
+
   /// -, soft trust: the heading measurement variance is multiplied by 1 + score, score =
   /// trust_weight * ((norm dev / norm_th)^2 + (dip dev / dip_th_deg)^2)
   /// + (rejection time not yet repaid) / tau_mag_s.

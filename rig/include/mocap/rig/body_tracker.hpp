@@ -141,6 +141,8 @@ class BodyTracker {
                                 const Eigen::Vector3d& gyro_bias_rad_s);
   void start_heading_from_motion(const CalibrationResult& r);
   void apply_heading_from_motion(int64_t t_ns);
+  /// Hands the sensors the calibration found off their site normal to their filters.
+  void suspect_local_fields(const CalibrationResult& r);
   /// A filter confirmed a local field at calibration and turned its heading by turn_rad.
   void fix_mounting_after_local_field(int seg, double turn_rad);
   /// Per sensor: its filter's local-field fixes last seen.
