@@ -183,7 +183,6 @@ void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double dt_s) {
   HeadingState& h = st_.heading;
   h.last_m_e = m_e;
   if (h.suspect) check_local_field(m_e, dt_s > 0 ? dt_s : c_.ts.mag_s);
-
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - h.delta_rad);
   const double sb2 = st_.bias.p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
   h.delta_var_rad2 += (c_.heading.q_rad2_s + sb2) * (dt_s > 0 ? dt_s : c_.ts.mag_s);  // real gap
