@@ -146,8 +146,8 @@ struct InputParams {
 /// tests, the heading lost (over angle_deg): set to the field's; both confirmed: the check
 /// ends. A recovery also returns the bias filter to its state before the clipped sample and
 /// forgives the field's rejection time. Without a clipped sample nothing changes; the
-/// thresholds are such that checks after every fast motion of the BROAD trials and the CMU
-/// clips change nothing (docs/filter.md).
+/// thresholds are such that checks after every fast motion change nothing on the BROAD trials
+/// and no CMU clip for the worse (docs/filter.md).
 struct UpsetParams {
   bool enabled = true;
   double gyr_deg_s = 1900;   ///< deg/s, an axis this fast may be clipped (input without flags)
