@@ -136,7 +136,6 @@ void AttitudeFilter::recover_upset(const Eigen::Quaterniond& q_acc, double delta
   d.reject_t_s = 0;
   d.cand_t_s = 0;
   d.cand_age_s = 0;
-  ++u.recoveries;
 }
 
 }  // namespace mocap

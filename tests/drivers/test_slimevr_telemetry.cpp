@@ -60,12 +60,17 @@ std::vector<uint8_t> report(std::initializer_list<const Bytes*> packets) {
   return r;
 }
 
+/// The four telemetry figures every packet type with them carries.
+void expect_telemetry(const sh::Packet& p, float battery, float volts, float celsius, float dbm) {
+  EXPECT_FLOAT_EQ(p.battery_fraction, battery);
+  EXPECT_FLOAT_EQ(p.battery_v, volts);
+  EXPECT_FLOAT_EQ(p.temperature_c, celsius);
+  EXPECT_FLOAT_EQ(p.rssi_dbm, dbm);
+}
+
 TEST(SlimeVrHidTelemetry, DeviceInfoGivesBatteryTemperatureIdentityAndSignal) {
   const sh::Packet p = parse(kInfo);
-  EXPECT_FLOAT_EQ(p.battery_fraction, 0.80f);
-  EXPECT_FLOAT_EQ(p.battery_v, 3.70f);
-  EXPECT_FLOAT_EQ(p.temperature_c, 25.0f);
-  EXPECT_FLOAT_EQ(p.rssi_dbm, -60.0f);
+  expect_telemetry(p, 0.80f, 3.70f, 25.0f, -60.0f);
   EXPECT_EQ(p.board, 9);
   EXPECT_EQ(p.mcu, 12);
   EXPECT_EQ(p.imu, 11);
@@ -94,10 +99,7 @@ TEST(SlimeVrHidTelemetry, DeviceInfoGivesBatteryTemperatureIdentityAndSignal) {
 
 TEST(SlimeVrHidTelemetry, TypesTwoToSevenInTheFirmwaresLayouts) {
   const sh::Packet c = parse(kCompact);
-  EXPECT_FLOAT_EQ(c.battery_fraction, 0.80f);
-  EXPECT_FLOAT_EQ(c.battery_v, 3.70f);
-  EXPECT_FLOAT_EQ(c.temperature_c, 25.0f);
-  EXPECT_FLOAT_EQ(c.rssi_dbm, -58.0f);
+  expect_telemetry(c, 0.80f, 3.70f, 25.0f, -58.0f);
   ASSERT_TRUE(c.has_quat && c.has_accel);
   EXPECT_NEAR(c.quat_xyzw[3], 1.0, 1e-3);
   EXPECT_DOUBLE_EQ(c.accel_m_s2[2], 9.0);

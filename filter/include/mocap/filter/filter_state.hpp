@@ -129,7 +129,6 @@ struct UpsetState {
   Eigen::Vector3d bias_before_rad_s = Eigen::Vector3d::Zero();
   Eigen::Matrix3d bias_p_before = Eigen::Matrix3d::Zero();
   bool bias_p_init_before = false;
-  uint32_t recoveries = 0;  ///< orientations reset so far
 };
 
 /// Everything that evolves; can be saved and restored (plain data).
