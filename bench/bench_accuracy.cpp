@@ -155,7 +155,7 @@ void print_markdown_row(const sim::AccuracyResult& r) {
 /// mocap bench accuracy's command line (declared in add_accuracy).
 struct AccuracyCommandOptions {
   std::string motion = "all", disturbance = "none,both", heading = "normals", mag = "on", clips,
-              seeds, filter_param, sensor_errors;
+              seeds, filter_param, sensor_errors, mount = "sites", mounting_motion = "on";
   long seed = 1;
   double rate_hz = 100, frame_rate_hz = 0;
   bool calibration_moves = false, gyro_scale_calibration = false, warmup = false, ideal = false,
@@ -186,6 +186,7 @@ int run_accuracy(const AccuracyCommandOptions& args) {
   base.frame_rate_hz = args.frame_rate_hz;
 
   base.warmup = args.warmup;
+  base.mounting_motion = args.mounting_motion == "on";
   if (args.ideal) base.sensor = sim::SensorModelParams::ideal();
   if (!args.sensor_errors.empty()) {
     std::string bad;
@@ -195,6 +196,7 @@ int run_accuracy(const AccuracyCommandOptions& args) {
       return 2;
     }
   }
+  base.sensor.random_mount_orientation = args.mount == "random";
   auto motions = expand(args.motion, all_motions);
   if (!args.clips.empty()) {
     motions.clear();
@@ -287,6 +289,15 @@ void add_accuracy(CLI::App& bench, int& exit_code) {
                 "(mag = mag_hard_iron + mag_scale + mag_noise; error breakdown; default all)");
   c->add_flag("--ideal", o->ideal,
               "ideal sensors (no noise, bias, misalignment): isolates the pipeline");
+  c->add_option(
+       "--mount", o->mount,
+       "sites: sensors on the standard sites (5 deg strap tilt); random: each strapped at a "
+       "uniformly random orientation on its segment (the rig still assumes the sites)")
+      ->check(CLI::IsMember({"sites", "random"}));
+  c->add_option("--mounting-motion", o->mounting_motion,
+                "on: the calibration moves also serve as the mounting motion (facings from the "
+                "segments' tilt, as `mocapctl calibrate mounting`); off: N-pose only")
+      ->check(CLI::IsMember({"on", "off"}));
   c->add_flag("--markdown", o->markdown, "also print a markdown table on stderr");
   c->callback([o, &exit_code] { exit_code = run_accuracy(*o); });
 }

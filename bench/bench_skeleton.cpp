@@ -132,9 +132,10 @@ Accuracy accuracy_with_performer(const std::string& motion, bool ankle_contact,
   RigMapping rig = RigMapping::none();
   for (int s = 0; s < kSegmentCount; ++s)
     rig.sensor_for_segment[s] = sim::Performer::sensor_of(static_cast<Segment>(s));
-  CalibratorOptions co;
-  co.heading_axis_sensor = sim::pelvis_forward_axis_sensor();
-  Calibrator cal(rig, co);
+  rig::CalibrationSetup setup;
+  setup.heading = HeadingSource::pelvis_sensor;
+  setup.heading_axis_sensor = sim::pelvis_forward_axis_sensor();
+  rig::PoseCapturer cal(rig);
   const auto [c0, c1] = perf.calibration_window_s();
   const double dt = 0.01;
   const double cap_start = c0 + 0.25, cap_len = std::min(2.0, c1 - c0 - 0.5);
@@ -143,7 +144,8 @@ Accuracy accuracy_with_performer(const std::string& motion, bool ankle_contact,
     for (int id = 0; id < sim::Performer::kSensorCount; ++id)
       cal.add_sample(index(sim::Performer::sensor_segment(id)),
                      perf.sensor_kinematics(id, t).q_earth_sensor, static_cast<int64_t>(t * 1e9));
-  const CalibrationResult r = cal.finish();
+  rig::Alignment alignment;
+  const rig::CalibrationResult r = rig::calibrate(cal.finish(), setup, {}, nullptr, alignment);
   a.message = r.message;
   if (!r.ok()) return a;
   SkeletonOptions so;

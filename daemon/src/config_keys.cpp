@@ -114,9 +114,14 @@ const Section<FilterConfig>& section() {
       {.name = "use_mag",
        .at = AT(use_mag),
        .help = "9-D orientation (magnetometer heading) or 6-D (each sensor's heading is then "
-               "aligned on its own at the N-pose calibration from its site's outward normal; "
-               "head and feet take the alignment of the nearest segment above them, "
-               "docs/skeleton.md)"},
+               "aligned on its own: at the N-pose calibration from its site's outward normal or "
+               "the mounting motion, and from motion with its neighbours, docs/skeleton.md)"},
+      {.name = "mag_local_field_hold_s",
+       .removed = "a local field at the calibration is watched by the body tracker "
+                  "(rig/local_field_watch.hpp), not the filter"},
+      {.name = "mag_local_field_step_s",
+       .removed = "a local field at the calibration is watched by the body tracker "
+                  "(rig/local_field_watch.hpp), not the filter"},
   };
   static const Section<S> s{
       "filter",

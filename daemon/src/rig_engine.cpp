@@ -28,11 +28,10 @@ rig::TrackerOptions tracker_options(const Config& cfg) {
   o.use_mag = cfg.filter.use_mag;
   o.skeleton.root.pinned = !cfg.body.root_motion;
   o.skeleton.stale_after_ns = static_cast<int64_t>(cfg.pipeline.stale_after_ms * 1e6);
-  CalibratorOptions& c = o.calibrator;
-  c.capture_s = cfg.calibration.capture_s;
+  o.capture.capture_s = cfg.calibration.capture_s;
   const auto& a = cfg.calibration.heading_axis_sensor;
-  c.heading_axis_sensor = Eigen::Vector3d(a[0], a[1], a[2]);
-  c.heading = cfg.calibration.heading;
+  o.calibration.heading_axis_sensor = Eigen::Vector3d(a[0], a[1], a[2]);
+  o.calibration.heading = cfg.calibration.heading;
   return o;
 }
 
@@ -64,9 +63,10 @@ void RigEngine::on_sample(int i, const ImuSample& s) {
       save_calibration_file(s.t_host_ns);
       if (log_) log_->info("calibration done: %s", r->message.c_str());
     } else if (log_) {
-      log_->warn("calibration %s: %s",
-                 r->status == CalibrationStatus::need_tpose ? "needs a T-pose next" : "refused",
-                 r->message.c_str());
+      log_->warn(
+          "calibration %s: %s",
+          r->status == rig::CalibrationStatus::need_tpose ? "needs a T-pose next" : "refused",
+          r->message.c_str());
     }
   }
 }

@@ -400,8 +400,7 @@ FilterOutput AttitudeFilter::output() const {
   o.flags.mag_reference = have_mag && st_.mag_dist.have_ref;
   o.hard_iron_uT = st_.hard_iron.applied_uT;
   o.hard_iron_sigma_uT = st_.hard_iron.est.offset_sigma_uT;
-  o.local_field_fixes = st_.heading.local_field_fixes;
-  o.local_field_fix_rad = st_.heading.local_field_fix_rad;
+  o.mag_6d_uT = st_.heading.last_m_e;
   return o;
 }
 

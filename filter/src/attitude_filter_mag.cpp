@@ -182,56 +182,14 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
 void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double dt_s) {
   HeadingState& h = st_.heading;
   h.last_m_e = m_e;
-  if (h.suspect) check_local_field(m_e, dt_s > 0 ? dt_s : c_.ts.mag_s);
   const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - h.delta_rad);
   const double sb2 = st_.bias.p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
   h.delta_var_rad2 += (c_.heading.q_rad2_s + sb2) * (dt_s > 0 ? dt_s : c_.ts.mag_s);  // real gap
   const double r = heading_measurement_var();
-  const double k = h.suspect ? 0.0 : heading_gain(h.delta_var_rad2 / (h.delta_var_rad2 + r));
+  const double k = heading_gain(h.delta_var_rad2 / (h.delta_var_rad2 + r));
   h.delta_rad = wrap_pi(h.delta_rad + k * err);
   h.delta_var_rad2 = (1 - k) * (1 - k) * h.delta_var_rad2 + k * k * r;
   h.q_delta = heading_quat(h.delta_rad);
-}
-
-void AttitudeFilter::suspect_local_field(double turn_rad) {
-  HeadingState& h = st_.heading;
-  if (!(h.last_m_e.squaredNorm() > 0) || !std::isfinite(turn_rad)) return;
-  h.suspect = true;
-  h.suspect_m_e = h.last_m_e;
-  h.suspect_turn_rad = turn_rad;
-  h.suspect_t_s = 0;
-  h.suspect_lp_rad = 0;
-}
-
-// While a local field is suspected: once the field's heading (6D frame) has turned by about
-// the suspected amount, at least half of it within a few seconds (the sensor left the local
-// field; the 6D frame's own drift is far slower: that half is taken against the turn
-// low-passed over local_field_step_s), the heading turns with it; given up after
-// local_field_hold_s.
-void AttitudeFilter::check_local_field(const Eigen::Vector3d& m_e, double dt_s) {
-  HeadingState& h = st_.heading;
-  h.suspect_t_s += dt_s;
-  const double n = m_e.norm(), hn = h.suspect_m_e.norm();
-  const double turn = h.suspect_turn_rad;
-  const double turned =
-      wrap_pi(std::atan2(m_e.x(), m_e.y()) - std::atan2(h.suspect_m_e.x(), h.suspect_m_e.y()));
-  const double step = wrap_pi(turned - h.suspect_lp_rad);
-  h.suspect_lp_rad =
-      wrap_pi(h.suspect_lp_rad + gain_from_tau(p_.mag_dist.local_field_step_s, dt_s) * step);
-  // About the suspected turn in all, at least half of it within the last few seconds.
-  const bool as_suspected =
-      n > 0 && std::abs(n - hn) <= p_.mag_dist.norm_th * hn &&
-      std::abs(wrap_pi(turned - turn)) <= std::max(5.0 * kRadPerDeg, 0.35 * std::abs(turn)) &&
-      step * turn >= 0.5 * turn * turn;
-  if (!as_suspected) {
-    if (h.suspect_t_s > p_.mag_dist.local_field_hold_s) h.suspect = false;
-    return;
-  }
-  h.suspect = false;
-  h.delta_rad = wrap_pi(h.delta_rad + turned);
-  h.q_delta = heading_quat(h.delta_rad);
-  ++h.local_field_fixes;
-  h.local_field_fix_rad = turned;
 }
 
 // Nominal (steady state = tau_mag), inflated by the squared disturbance indicators, each

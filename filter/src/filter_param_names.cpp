@@ -53,8 +53,6 @@ const Entry kEntries[] = {
     P(mag_min_undisturbed_time_s, mag_dist, min_undisturbed_time_s),
     P(mag_max_rejection_time_s, mag_dist, max_rejection_time_s),
     P(mag_rejection_factor, mag_dist, rejection_factor),
-    P(mag_local_field_hold_s, mag_dist, local_field_hold_s),
-    P(mag_local_field_step_s, mag_dist, local_field_step_s),
     P(hard_iron_tau_s, hard_iron, tau_s),
     P(hard_iron_sigma0, hard_iron, sigma0),
     P(hard_iron_field_rw_deg, hard_iron, field_rw_deg),

@@ -1,5 +1,5 @@
-// BodyTracker: gyro scale -> filter (or the sensor's own orientation) -> calibration capture ->
-// skeleton, for one rig.
+// BodyTracker: gyro scale -> filter (or the sensor's own orientation) -> the segment's sensor
+// orientation -> calibration and alignment -> skeleton, for one rig (see body_tracker.hpp).
 #include "mocap/rig/body_tracker.hpp"
 
 #include <algorithm>
@@ -15,19 +15,18 @@
 namespace mocap::rig {
 namespace {
 
-CalibratorOptions calibrator_options(const std::vector<TrackerSensor>& sensors,
-                                     const TrackerOptions& o) {
-  CalibratorOptions c = o.calibrator;
-  if (c.heading == HeadingSource::mount_normals) {
-    // A sensor lies flat on its site: its z axis is the site's outward normal.
-    c.heading_axis_sensor = Eigen::Vector3d::UnitZ();
-    for (const TrackerSensor& s : sensors) {
-      if (s.segment < 0) continue;
-      c.mount_normal_body[s.segment] =
-          s.site_normal_body.squaredNorm() > 0
-              ? s.site_normal_body.normalized()
-              : standard_site_normal_body(static_cast<Segment>(s.segment));
-    }
+/// The configured setup with each sensor's site normal filled in (its own, or its segment's
+/// standard site; none for a sensor strapped anyhow).
+CalibrationSetup calibration_setup(const std::vector<TrackerSensor>& sensors,
+                                   const TrackerOptions& o) {
+  CalibrationSetup c = o.calibration;
+  for (const TrackerSensor& s : sensors) {
+    if (s.segment < 0) continue;
+    c.site_normal_body[s.segment] =
+        !s.on_site ? Eigen::Vector3d::Zero()
+        : s.site_normal_body.squaredNorm() > 0
+            ? Eigen::Vector3d(s.site_normal_body.normalized())
+            : standard_site_normal_body(static_cast<Segment>(s.segment));
   }
   return c;
 }
@@ -52,22 +51,28 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       opt_(std::move(options)),
       filters_(sensors_.size(), AttitudeFilter(opt_.filter)),
       skeleton_(model, limits, rig_mapping(sensors_), opt_.skeleton),
-      calibrator_(rig_mapping(sensors_), calibrator_options(sensors_, opt_)),
+      capturer_(rig_mapping(sensors_), opt_.capture),
       heading_(opt_.heading_from_motion),
       has_mag_(sensors_.size(), false),
       is_source_(sensors_.size(), false),
       q_source_(sensors_.size(), Eigen::Quaterniond::Identity()),
+      field_watch_(sensors_.size()),
+      prev_t_ns_(sensors_.size(), 0),
       prev_w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
-      prev_w_t_ns_(sensors_.size(), 0),
-      local_field_fixes_seen_(sensors_.size(), 0) {}
+      prev_w_t_ns_(sensors_.size(), 0) {
+  opt_.calibration = calibration_setup(sensors_, opt_);
+  align_revision_seen_ = align_.revision();
+}
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
   return q_earth_sensor(i, filters_[static_cast<size_t>(i)].output());
 }
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i, const FilterOutput& o) const {
-  if (is_source_[static_cast<size_t>(i)]) return q_source_[static_cast<size_t>(i)];
-  return opt_.use_mag ? o.q_earth_sensor : o.q_earth_sensor_6d;
+  const size_t k = static_cast<size_t>(i);
+  if (is_source_[k]) return q_source_[k];
+  if (!opt_.use_mag) return o.q_earth_sensor_6d;
+  return field_watch_[k].q_earth_sensor(o);
 }
 
 SensorHealth BodyTracker::sensor_health(int i) const {
@@ -83,57 +88,133 @@ SensorHealth BodyTracker::sensor_health(int i, const FilterOutput& o) const {
   h.gyro_bias_rad_s = o.gyro_bias_rad_s.norm();
   h.heading_sigma_rad = opt_.use_mag ? o.heading_sigma_rad : 0.0;
   const int seg = sensors_[static_cast<size_t>(i)].segment;
-  const Calibration& c = skeleton_.calibration();
-  h.calibrated = seg >= 0 && c.valid && c.calibrated[seg];
+  h.calibrated = seg >= 0 && align_.segment(seg).aligned;
   return h;
 }
 
 void BodyTracker::on_sample(int i, const ImuSample& in) {
   if (i < 0 || i >= sensor_count()) return;
-  const TrackerSensor& sensor = sensors_[static_cast<size_t>(i)];
-  AttitudeFilter& f = filters_[static_cast<size_t>(i)];
+  const size_t k = static_cast<size_t>(i);
+  const TrackerSensor& sensor = sensors_[k];
+  AttitudeFilter& f = filters_[k];
   // 1. Gyro scale (1 when uncalibrated); a 6D rig ignores any magnetometer.
   ImuSample s = in;
-  if (s.has(kFieldMag)) has_mag_[static_cast<size_t>(i)] = true;
+  if (s.has(kFieldMag)) has_mag_[k] = true;
   s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(sensor.gyr_scale);
   if (!opt_.use_mag) s.valid = static_cast<uint8_t>(s.valid & ~kFieldMag);
   // 2. Filter; an orientation source (a tracker running its own filter, sending its
   //    orientation without rates: kFieldQuat and no gyro) stands in for it.
   if (s.has(kFieldQuat) && !s.has(kFieldGyr)) {
-    q_source_[static_cast<size_t>(i)] = s.q_device_sensor;
-    is_source_[static_cast<size_t>(i)] = true;
+    q_source_[k] = s.q_device_sensor;
+    is_source_[k] = true;
   } else {
     f.update(s);
   }
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
+  const double dt_s =
+      prev_t_ns_[k] != 0 ? static_cast<double>(s.t_host_ns - prev_t_ns_[k]) * 1e-9 : 0.0;
+  prev_t_ns_[k] = s.t_host_ns;
   const int seg = sensor.segment;
   if (seg < 0) return;
   const FilterOutput o = f.output();
-  if (o.local_field_fixes != local_field_fixes_seen_[static_cast<size_t>(i)]) {
-    local_field_fixes_seen_[static_cast<size_t>(i)] = o.local_field_fixes;
-    fix_mounting_after_local_field(seg, o.local_field_fix_rad);
+  // 3. The sensor's orientation as its segment uses it; a watched local field may turn the
+  //    mounting once it turns.
+  LocalFieldWatch& watch = field_watch_[k];
+  if (watch.holding()) {
+    double turned_rad = 0;
+    if (s.has(kFieldMag) && watch.on_field(o, dt_s, turned_rad))
+      align_.turn_mounting(seg, turned_rad, AlignSource::local_field);
+    watch.on_sample(o, dt_s);
   }
   const Eigen::Quaterniond q = q_earth_sensor(i, o);
-  // 3. Calibration capture.
-  if (calibrator_.capturing()) {
-    calibrator_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
-    if (calibrator_.done(s.t_host_ns)) {
-      calibrator_.set_own_heading_frames(own_heading_frames());
-      result_ = calibrator_.finish();
-      if (result_->ok()) {
-        suspect_local_fields(*result_);
-        skeleton_.set_calibration(result_->calibration);
-        start_heading_from_motion(*result_);
-      }
-    }
+  // 4. Calibration capture; when it completes, the calibration.
+  if (capturer_.capturing()) {
+    capturer_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
+    if (capturer_.done(s.t_host_ns)) finish_calibration();
   }
-  // 4. 6D: the heading of the sensors whose site normal could not give it, from motion.
+  if (mounting_.active()) {
+    mounting_.add(seg, q, s.t_host_ns);
+    if (mounting_.done(s.t_host_ns)) apply_motion_facings(mounting_.finish());
+  }
+  // 5. 6D: the heading of the sensors whose facing the calibration could not give, from motion.
   if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
     feed_heading_from_motion(i, s, q, o.gyro_bias_rad_s);
     apply_heading_from_motion(s.t_host_ns);
   }
-  // 5. The segment's input: orientation and the filter's flags.
+  publish_alignment();
+  // 6. The segment's input: orientation and the filter's flags.
   skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, sensor_health(i, o).segment_flags());
+}
+
+void BodyTracker::publish_alignment() {
+  if (align_.revision() == align_revision_seen_) return;
+  align_revision_seen_ = align_.revision();
+  skeleton_.set_calibration(align_.calibration());
+}
+
+void BodyTracker::finish_calibration() {
+  const PoseCapturer::Result captured = capturer_.finish();
+  const bool arm_swing = opt_.calibration.heading == HeadingSource::arm_swing;
+  const bool tpose = captured.capture.pose == CalibrationPose::tpose;
+  const PoseCapture* npose = arm_swing && tpose && npose_ ? &*npose_ : nullptr;
+  Alignment next = align_;
+  result_ = calibrate(captured, opt_.calibration, own_heading_frames(), npose, next);
+  if (result_->status == CalibrationStatus::need_tpose) npose_ = captured.capture;
+  if (!result_->ok()) return;
+  npose_.reset();
+  align_ = next;
+  for (LocalFieldWatch& w : field_watch_)
+    w = LocalFieldWatch{};
+  suspect_local_fields(*result_);
+  start_heading_from_motion();
+  if (mounting_motion_next_ && captured.capture.pose == CalibrationPose::npose)
+    mounting_.start(captured.capture, captured.capture.t_end_ns, opt_.mounting_motion_s);
+}
+
+void BodyTracker::apply_motion_facings(const std::array<Facing, kSegmentCount>& facing) {
+  std::array<bool, kSegmentCount> shared{};
+  for (int s = 0; s < kSegmentCount; ++s) {
+    const SegmentAlignment& a = align_.segment(s);
+    if (!facing[s].known() || !a.aligned) continue;
+    if (!a.facing.known() || facing[s].sigma_deg < a.facing.sigma_deg)
+      align_.set_facing(s, facing[s]);
+    shared[s] = !a.own_frame;
+  }
+  // The body heading from the sensors sharing the earth frame, when surer than the one used.
+  const BodyHeading b = body_heading_from_facings(facing, shared);
+  double sigma_deg = 180;
+  for (int s = 0; s < kSegmentCount; ++s)
+    if (b.agreed[s]) sigma_deg = std::min(sigma_deg, facing[s].sigma_deg);
+  if (b.heading_rad && sigma_deg < align_.body_heading_sigma_deg()) {
+    align_.set_body_heading(*b.heading_rad, AlignSource::motion, sigma_deg);
+    // A sensor whose motion agrees with the body heading was not in a local field: its site
+    // prior was off (not on its site, or the pose turned there).
+    for (size_t k = 0; k < sensors_.size(); ++k) {
+      const int sg = sensors_[k].segment;
+      if (sg >= 0 && b.agreed[sg]) field_watch_[k] = LocalFieldWatch{};
+    }
+  }
+  start_heading_from_motion();
+}
+
+void BodyTracker::solve(int64_t t_ns, PoseFrame& out) {
+  skeleton_.solve(t_ns, out);
+}
+
+void BodyTracker::set_calibration(const Calibration& c) {
+  align_.load(c);
+  publish_alignment();
+}
+
+void BodyTracker::reset_heading() {
+  std::array<Eigen::Quaterniond, kSegmentCount> q_es;
+  std::array<bool, kSegmentCount> have{};
+  for (int s = 0; s < kSegmentCount; ++s) {
+    q_es[s] = skeleton_.sensor_orientation(s);
+    have[s] = skeleton_.sensor_live(s);
+  }
+  align_.reset_heading(q_es, have);
+  publish_alignment();
 }
 
 void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q,
@@ -143,7 +224,7 @@ void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eige
   constexpr double kGravity_m_s2 = 9.81;
   const size_t k = static_cast<size_t>(i);
   const int seg = sensors_[k].segment;
-  const Calibration& c = skeleton_.calibration();
+  const Calibration& c = align_.calibration();
   const Eigen::Vector3d w = s.gyr_rad_s - gyro_bias_rad_s;
   const double dt_s = static_cast<double>(s.t_host_ns - prev_w_t_ns_[k]) * 1e-9;
   const bool have_dw = prev_w_t_ns_[k] != 0 && dt_s > 0 && dt_s < 0.05;
@@ -160,7 +241,6 @@ void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eige
     const Eigen::Vector3d a = s.acc_m_s2 + dw.cross(r) + w.cross(w.cross(r));
     return q_aligned * a - Eigen::Vector3d(0, 0, kGravity_m_s2);
   };
-  // The same high-pass for both signals of a pair (it commutes with the yaw sought).
   // The same band-pass for both signals of a pair (it commutes with the yaw sought): the
   // high-pass removes each filter's slow gravity leak, the low-pass the jitter above a few Hz
   // (skin, the rotation terms' differentiated rate) that carries no joint motion.
@@ -208,23 +288,22 @@ std::array<bool, kSegmentCount> BodyTracker::own_heading_frames() const {
   return own;
 }
 
-void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
+void BodyTracker::start_heading_from_motion() {
   std::array<int, kSegmentCount> reference;
   reference.fill(-1);
   const RigMapping& rig = skeleton_.rig();
   const std::array<bool, kSegmentCount> own = own_heading_frames();
   // A segment's heading is known when its sensor shares the earth frame (magnetometer) or was
-  // aligned from its own site normal; the others are fitted to the nearest known one above.
-  const auto known = [&](int s) {
-    return rig.tracked(s) && (!own[s] || r.heading_from_own_normal[s]);
-  };
+  // aligned from its own facing; the others are fitted to the nearest known one above.
+  const auto facing_known = [&](int s) { return align_.segment(s).facing.known(); };
+  const auto known = [&](int s) { return rig.tracked(s) && (!own[s] || facing_known(s)); };
   const auto known_above = [&](int s) {
     int p = kSegmentParent[s];
     while (p >= 0 && !known(p))
       p = kSegmentParent[p];
     return p;
   };
-  if (opt_.calibrator.heading == HeadingSource::mount_normals)
+  if (opt_.calibration.heading == HeadingSource::mount_normals)
     for (int s = 0; s < kSegmentCount; ++s)
       if (rig.tracked(s) && !known(s)) reference[s] = known_above(s);
   // Segments aligned from their own horizontal site normal are refined against the same
@@ -234,14 +313,16 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
   refine_.fill(false);
   turned_rad_.fill(0);
   if (opt_.heading_from_motion.refine_max_deg > 0 &&
-      opt_.calibrator.heading == HeadingSource::mount_normals)
+      opt_.calibration.heading == HeadingSource::mount_normals)
     for (int s = 0; s < kSegmentCount; ++s) {
-      if (!known(s) || !own[s] || !r.heading_from_own_normal[s]) continue;
+      if (!known(s) || !own[s] || align_.segment(s).facing.source != AlignSource::site_normal)
+        continue;
       if (s == index(Segment::upper_arm_l) || s == index(Segment::upper_arm_r)) continue;
       reference[s] = known_above(s);
       refine_[s] = reference[s] >= 0;
     }
   heading_.reset(reference);
+  const CalibrationPose pose = align_.calibration().pose;
   // Joint accelerations pair a segment with its parent or, through the neck (never tracked,
   // short and stiff: held in its calibration pose), the head with the torso; further up (a
   // foot under an untracked shank) the knee's own motion would dominate: rates instead.
@@ -256,9 +337,8 @@ void BodyTracker::start_heading_from_motion(const CalibrationResult& r) {
     // The joint (s's origin) in the reference's frame.
     Eigen::Vector3d joint_m = model.joint_offset_m(s);
     if (ref != p)
-      joint_m =
-          model.joint_offset_m(p) + q_body_segment_in_pose(r.calibration.pose, ref).conjugate() *
-                                        (q_body_segment_in_pose(r.calibration.pose, p) * joint_m);
+      joint_m = model.joint_offset_m(p) + q_body_segment_in_pose(pose, ref).conjugate() *
+                                              (q_body_segment_in_pose(pose, p) * joint_m);
     // The own lever arm: whole where the mounting is known from the N-pose (a refined
     // segment), else only its part along the site normal.
     const Eigen::Vector3d site_m =
@@ -282,8 +362,6 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   heading_applied_t_ns_ = t_ns;
   const double dead_band_rad = opt_.heading_from_motion.refine_dead_band_deg * kRadPerDeg;
   const double refine_max_rad = opt_.heading_from_motion.refine_max_deg * kRadPerDeg;
-  Calibration c = skeleton_.calibration();
-  bool changed = false;
   for (int s = 0; s < kSegmentCount; ++s) {
     double yaw = 0;
     if (!heading_.estimate(s, yaw)) continue;
@@ -304,25 +382,16 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
       if (std::abs(yaw) < 1e-9) continue;
     }
     heading_found_[s] = true;
-    // The sensor's frame turns by yaw; its mounting keeps the segment's calibration pose:
-    // q_ss' = q_ss T^-1 Y^-1 T with T the segment's orientation at calibration.
-    const Eigen::Quaterniond y(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
-    const Eigen::Quaterniond t = Eigen::Quaterniond(Eigen::AngleAxisd(c.heading_deg * kRadPerDeg,
-                                                                      Eigen::Vector3d::UnitZ())) *
-                                 q_body_segment_in_pose(c.pose, s);
-    c.q_correction[s] = (y * c.q_correction[s]).normalized();
-    c.q_sensor_segment[s] =
-        (c.q_sensor_segment[s] * t.conjugate() * y.conjugate() * t).normalized();
+    // The sensor's frame turns by yaw; its mounting keeps the segment's calibration pose.
+    align_.realign(s, yaw, AlignSource::joint, align_.segment(s).heading_sigma_deg);
     heading_.applied(s, yaw);
-    changed = true;
   }
-  if (changed) skeleton_.set_calibration(c);
 }
 
-// A sensor the calibration found far off its site normal, whose field looks like the earth's
+// A sensor the calibration found far off the body heading, whose field looks like the earth's
 // (norm within mag_dist.norm_th of the rig's median: a turned field no test of its own can
-// catch), is handed to its filter to hold and re-check. A field that does not look like the
-// earth's is the filter's own disturbance tests' business.
+// catch), is watched: its heading held and re-checked (local_field_watch.hpp). A field that
+// does not look like the earth's is the filter's own disturbance tests' business.
 void BodyTracker::suspect_local_fields(const CalibrationResult& r) {
   std::array<double, kSegmentCount> norm{};
   std::array<double, kSegmentCount> sorted{};
@@ -336,32 +405,20 @@ void BodyTracker::suspect_local_fields(const CalibrationResult& r) {
   if (n == 0) return;
   std::sort(sorted.begin(), sorted.begin() + n);
   const double median = sorted[n / 2];
+  const double norm_th = opt_.filter.mag_dist.norm_th;
   for (size_t k = 0; k < sensors_.size(); ++k) {
     const int sg = sensors_[k].segment;
     if (sg < 0 || !has_mag_[k] || r.heading_off_normal_rad[sg] == 0) continue;
-    if (std::abs(norm[sg] - median) > opt_.filter.mag_dist.norm_th * median) continue;
-    filters_[k].suspect_local_field(-r.heading_off_normal_rad[sg]);
+    if (std::abs(norm[sg] - median) > norm_th * median) continue;
+    field_watch_[k].suspect(-r.heading_off_normal_rad[sg], filters_[k].output(), norm_th);
   }
 }
 
-// The calibration took this sensor's orientation with the local field's heading; its filter
-// has now turned by turn_rad onto the earth's: the mounting turns alike, as if the
-// calibration had seen the true heading (q_ss' = q_ss B^-1 Rz(-turn) B, B the segment's
-// orientation in the calibration pose).
-void BodyTracker::fix_mounting_after_local_field(int seg, double turn_rad) {
-  Calibration c = skeleton_.calibration();
-  if (seg < 0 || !c.valid || !c.calibrated[seg]) return;
-  const Eigen::Quaterniond b =
-      Eigen::Quaterniond(Eigen::AngleAxisd(c.heading_deg * kRadPerDeg, Eigen::Vector3d::UnitZ())) *
-      q_body_segment_in_pose(c.pose, seg);
-  const Eigen::Quaterniond y(Eigen::AngleAxisd(-turn_rad, Eigen::Vector3d::UnitZ()));
-  c.q_sensor_segment[seg] = (c.q_sensor_segment[seg] * b.conjugate() * y * b).normalized();
-  skeleton_.set_calibration(c);
-}
-
-void BodyTracker::start_calibration(CalibrationPose pose, int64_t t_start_ns) {
+void BodyTracker::start_calibration(CalibrationPose pose, int64_t t_start_ns,
+                                    bool mounting_motion) {
   result_.reset();
-  calibrator_.start(pose, t_start_ns);
+  capturer_.start(pose, t_start_ns);
+  mounting_motion_next_ = mounting_motion;
 }
 
 std::optional<CalibrationResult> BodyTracker::take_calibration_result() {

@@ -79,10 +79,10 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   rig::TrackerOptions topt;
   topt.filter = fp;
   topt.use_mag = o.use_mag;
-  topt.calibrator.capture_s = o.capture_s;
-  topt.calibrator.heading = o.heading;
-  topt.calibrator.explicit_heading_deg = o.explicit_heading_deg;
-  topt.calibrator.heading_axis_sensor = pelvis_forward_axis_sensor();
+  topt.capture.capture_s = o.capture_s;
+  topt.calibration.heading = o.heading;
+  topt.calibration.explicit_heading_deg = o.explicit_heading_deg;
+  topt.calibration.heading_axis_sensor = pelvis_forward_axis_sensor();
   rig::BodyTracker tracker(BodyModel(perf.dims()), default_joint_limits(), sensors, topt);
 
   // The reference: the same samples through each sensor's filter alone, no body model; in 6D
@@ -103,7 +103,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   if (capture_start_s + o.capture_s > calib_end_s + 1e-9)
     throw std::invalid_argument("accuracy: calibration capture does not fit in the N-pose stand");
   const auto to_ns = [](double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e9)); };
-  tracker.start_calibration(CalibrationPose::npose, to_ns(capture_start_s));
+  tracker.start_calibration(CalibrationPose::npose, to_ns(capture_start_s),
+                            o.calibration_moves && o.mounting_motion);
 
   // Frames fall on the sample times (the performer's sensors sample together).
   const double frame_s = 1.0 / (o.frame_rate_hz > 0 ? o.frame_rate_hz : o.rate_hz);

@@ -99,6 +99,14 @@ SensorMount make_mount(Segment seg, const BodyDimensions& dims, const SensorMode
     q = q * Eigen::AngleAxisd(roll_rad, V::UnitZ());
   const V mis(tilt(rng), tilt(rng), tilt(rng));
   if (mis.norm() > 0) q = q * Eigen::AngleAxisd(mis.norm(), mis.normalized());
+  if (p.random_mount_orientation) {
+    // Uniform over rotations (normalised 4D Gaussian), from a stream of its own so that the
+    // other draws do not change.
+    std::mt19937_64 copy = rng;  // a copy: the shared stream does not advance
+    std::mt19937_64 any(copy() ^ (0x9E3779B97F4A7C15ull * static_cast<uint64_t>(index(seg) + 1)));
+    std::normal_distribution<double> n(0, 1);
+    q = Eigen::Quaterniond(n(any), n(any), n(any), n(any));
+  }
   return {seg, r, q.normalized()};
 }
 

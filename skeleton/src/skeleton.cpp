@@ -55,19 +55,6 @@ void Skeleton::set_calibration(const Calibration& c) {
   ++calib_revision_;
 }
 
-void Skeleton::reset_heading(const double* target_heading_deg) {
-  std::array<bool, kSegmentCount> have{};
-  for (int i = 0; i < kSegmentCount; ++i)
-    have[i] = have_[i] && !dead_[i] && rig_.tracked(i);
-  if (target_heading_deg) {
-    const double rad = *target_heading_deg * kRadPerDeg;
-    apply_heading_reset(calib_, q_es_, have, &rad);
-  } else {
-    apply_heading_reset(calib_, q_es_, have);
-  }
-  ++calib_revision_;
-}
-
 void Skeleton::set_sensor_live(int segment, bool live) {
   if (segment >= 0 && segment < kSegmentCount) dead_[segment] = !live;
 }

@@ -51,8 +51,8 @@ ImuSample sample(int id, const Eigen::Quaterniond& q_earth_sensor, const Eigen::
 BodyTracker mount_normals_tracker(const Rig& rig, bool use_mag) {
   TrackerOptions o;
   o.use_mag = use_mag;
-  o.calibrator.heading = HeadingSource::mount_normals;
-  o.calibrator.capture_s = 1.0;
+  o.calibration.heading = HeadingSource::mount_normals;
+  o.capture.capture_s = 1.0;
   return BodyTracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
 }
 
@@ -144,9 +144,10 @@ void six_d_calibration(bool rig_use_mag) {
       if (!res) res = tracker.take_calibration_result();
     }
   ASSERT_TRUE(res && res->ok()) << (res ? res->message : "no result");
-  EXPECT_TRUE(res->heading_from_own_normal[index(Segment::pelvis)]);
-  EXPECT_TRUE(res->heading_from_own_normal[index(Segment::thigh_l)]);
-  EXPECT_FALSE(res->heading_from_own_normal[index(Segment::foot_l)]);  // vertical normal
+  EXPECT_TRUE(res->facing[index(Segment::pelvis)].known());
+  EXPECT_TRUE(res->facing[index(Segment::thigh_l)].known());
+  EXPECT_FALSE(res->facing[index(Segment::foot_l)].known());  // vertical normal
+  EXPECT_NE(res->message.find("foot_l"), std::string::npos) << res->message;
   EXPECT_TRUE(tracker.heading_from_motion().active());
 }
 
@@ -166,8 +167,8 @@ TEST(BodyTracker, SensorsWithoutMagnetometerSamplesAreTakenAsSixD) {
 TEST(BodyTracker, OrientationSourcesSkipTheFilterAndCalibrate) {
   Rig rig;
   TrackerOptions o;
-  o.calibrator.heading = HeadingSource::mount_normals;
-  o.calibrator.capture_s = 1.0;
+  o.calibration.heading = HeadingSource::mount_normals;
+  o.capture.capture_s = 1.0;
   BodyTracker tracker(BodyModel{}, default_joint_limits(), rig.sensors, o);
   tracker.start_calibration(CalibrationPose::npose, 500'000'000);
   std::optional<CalibrationResult> res;

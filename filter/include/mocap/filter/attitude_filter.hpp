@@ -61,10 +61,10 @@ struct FilterOutput {
   FilterFlags flags;
   Eigen::Vector3d hard_iron_uT = Eigen::Vector3d::Zero();  ///< offset subtracted (sensor frame)
   double hard_iron_sigma_uT = 0;  ///< its largest one-sigma (directions above the gate unused)
-  /// suspect_local_field() confirmations so far, and the newest heading turn applied (rad):
-  /// whoever calibrated with the old heading fixes the mounting by it.
-  uint32_t local_field_fixes = 0;
-  double local_field_fix_rad = 0;
+  /// The newest field (hard iron removed) in the 6D frame, uT; zero before any. Its heading
+  /// there is what the heading follows (a body tracker watches it for a local field,
+  /// rig/local_field_watch.hpp).
+  Eigen::Vector3d mag_6d_uT = Eigen::Vector3d::Zero();
 };
 
 /// Quaternion attitude filter for one sensor. Allocation-free update.
@@ -77,15 +77,6 @@ class AttitudeFilter {
   void update(const ImuSample& s);
   /// What a consumer reads: orientation, bias, heading uncertainty, flags, hard iron.
   FilterOutput output() const;
-
-  /// Someone who knows better (the body tracker, from the site normal in the calibration pose)
-  /// suspects that the field here is a local one taken for north (a magnet, steel) and that
-  /// the true heading is turn_rad away. The heading is held (the field ignored) until the
-  /// field's heading in the 6D frame has turned by about turn_rad (within max(5 deg, 35 %), its
-  /// norm within mag_dist.norm_th: the sensor left the local field): then the heading turns by
-  /// what the field turned (counted in FilterOutput::local_field_fixes). Given up after
-  /// mag_dist.local_field_hold_s: nothing changes.
-  void suspect_local_field(double turn_rad);
 
   FilterState state() const { return st_; }  ///< save (plain data)
   void set_state(const FilterState& s);      ///< restore
@@ -121,7 +112,6 @@ class AttitudeFilter {
   Eigen::Vector3d mag_to_earth(const Eigen::Vector3d& mag, const Eigen::Quaterniond& q6);
   void update_mag_disturbance(const Eigen::Vector3d& m_e);
   void update_heading(const Eigen::Vector3d& m_e, double dt_s);
-  void check_local_field(const Eigen::Vector3d& m_e, double dt_s);
   /// The heading measurement's variance: nominal, inflated by the soft trust score.
   double heading_measurement_var() const;
   /// The heading gain after the rejection and start-up rules (k: the Kalman gain).

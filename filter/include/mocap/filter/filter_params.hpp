@@ -68,11 +68,6 @@ struct MagDisturbanceParams {
   double min_undisturbed_time_s = 0.5;  ///< s, undisturbed this long before it is used
   double max_rejection_time_s = 60.0;   ///< s, longest full rejection
   double rejection_factor = 2.0;        ///< -, gain divisor after that
-  /// s, longest heading hold while a suspected local field (suspect_local_field) stays.
-  double local_field_hold_s = 20.0;
-  /// s, the field's turn out of a suspected local field counts against its value low-passed
-  /// over this time (a step as the sensor leaves it, not the 6D frame's slow drift).
-  double local_field_step_s = 3.0;
 
   /// -, soft trust: the heading measurement variance is multiplied by 1 + score, score =
   /// trust_weight * ((norm dev / norm_th)^2 + (dip dev / dip_th_deg)^2)

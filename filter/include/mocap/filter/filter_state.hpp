@@ -42,14 +42,6 @@ struct HeadingState {
   double k_init = 1.0;  ///< start-up gain schedule (0 once over)
   bool set = false;     ///< the first field sample set the provisional heading
   Eigen::Vector3d last_m_e = Eigen::Vector3d::Zero();  ///< newest field, 6D frame
-  /// suspect_local_field(): the heading held, the field then (6D frame), the turn suspected,
-  /// time held; and the turns confirmed so far (count, the newest).
-  bool suspect = false;
-  Eigen::Vector3d suspect_m_e = Eigen::Vector3d::Zero();
-  double suspect_turn_rad = 0, suspect_t_s = 0;
-  double suspect_lp_rad = 0;  ///< the field's heading turn since then, low-passed
-  uint32_t local_field_fixes = 0;
-  double local_field_fix_rad = 0;
 };
 
 /// Gyro bias Kalman filter, fed once per block of acc samples (about 100 Hz).

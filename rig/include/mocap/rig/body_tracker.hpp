@@ -3,18 +3,21 @@
 //   2. the sensor's AttitudeFilter (9D, or 6D without magnetometers), or for an orientation
 //      source (a sample with q_device_sensor and no gyro, e.g. a SlimeVR tracker) its own
 //      orientation (z-up earth frame, heading its own, aligned at calibration like 6D),
-//   3. the calibration capture (N-/T-pose, Calibrator), which turns each sensor's orientation
-//      into its segment's (mounting, and in 6D each sensor's own heading from its site normal),
-//   4. in 6D, the heading alignment from motion of the sensors whose site normal is vertical
-//      (head, feet: heading_from_motion.hpp), a constant per sensor once found,
-//   5. the skeleton's input (orientation and flags);
+//   3. the sensor's orientation as its segment uses it: the filter's 9D or 6D output, or, for a
+//      9D sensor whose filter took a local field for north at the calibration, held until the
+//      field turns (local_field_watch.hpp),
+//   4. the calibration capture (pose_capture.hpp) and, when it completes, the calibration
+//      (calibrate.hpp) into the segments' alignment,
+//   5. in 6D, the heading alignment from motion of the sensors whose facing the calibration
+//      could not give (heading_from_motion.hpp),
+//   6. the skeleton's input (orientation and flags);
 // and per frame the skeleton solve (each segment holds its sensor's newest orientation).
 //
-// Nothing between the filter and the segment changes a segment's motion: a segment is its own
-// sensor's filter output through a constant calibration, so the body can never make a segment
-// worse than its sensor's filter alone (docs/accuracy.md shows why every body-level correction
-// tried so far was removed). mocapd, mocap replay, mocap bench accuracy and the tests all run
-// this class; it knows no configuration file, clock or thread.
+// Each segment's alignment (mounting and heading, with the source and sigma of each) has one
+// owner, the Alignment (alignment.hpp): the calibration, the steps above, a heading reset and a
+// saved calibration change it only through its methods, and the skeleton reads the Calibration
+// it builds. mocapd, mocap replay, mocap bench accuracy and the tests all run this class; it
+// knows no configuration file, clock or thread.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -24,9 +27,13 @@
 
 #include "mocap/core/imu_sample.hpp"
 #include "mocap/filter/attitude_filter.hpp"
+#include "mocap/rig/alignment.hpp"
+#include "mocap/rig/calibrate.hpp"
 #include "mocap/rig/heading_from_motion.hpp"
+#include "mocap/rig/local_field_watch.hpp"
+#include "mocap/rig/mounting_motion.hpp"
+#include "mocap/rig/pose_capture.hpp"
 #include "mocap/rig/sensor_health.hpp"
-#include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
 namespace mocap::rig {
@@ -40,6 +47,8 @@ struct TrackerSensor {
   /// Outward normal of its site in the body frame (the sensor's z axis lies along it); zero:
   /// the segment's standard site (skeleton/sensor_sites.hpp).
   Eigen::Vector3d site_normal_body = Eigen::Vector3d::Zero();
+  /// false: strapped anyhow (no site assumed); its mounting yaw is found from motion.
+  bool on_site = true;
 };
 
 struct TrackerOptions {
@@ -47,10 +56,13 @@ struct TrackerOptions {
   /// With magnetometers (9D: one earth frame for all sensors). false: 6D, each filter has a
   /// heading of its own, aligned at calibration from its site's normal.
   bool use_mag = true;
-  /// Calibration capture; heading source mount_normals takes the site normals from the sensors.
-  CalibratorOptions calibrator;
+  PoseCaptureOptions capture;
+  /// Body-heading source and facings; the site normals are filled from the sensors.
+  CalibrationSetup calibration;
   SkeletonOptions skeleton;
   HeadingFromMotionOptions heading_from_motion;  ///< 6D only
+  /// Length of the mounting motion's window after its N-pose capture, seconds.
+  double mounting_motion_s = 5.0;
 };
 
 class BodyTracker {
@@ -62,23 +74,29 @@ class BodyTracker {
   /// One sample of sensor `i` (its index in the rig). Never allocates.
   void on_sample(int i, const ImuSample& sample);
   /// Starts a capture in `pose`; samples from t_start_ns on are averaged. The result is taken
-  /// with take_calibration_result() after the sample that completes it.
-  void start_calibration(CalibrationPose pose, int64_t t_start_ns);
-  bool capturing() const { return calibrator_.capturing(); }
-  double calibration_progress(int64_t t_ns) const { return calibrator_.progress(t_ns); }
+  /// with take_calibration_result() after the sample that completes it. With mounting_motion
+  /// (an N-pose only), the mounting motion follows the capture for options().mounting_motion_s
+  /// (mounting_motion.hpp): each segment's facing found from it replaces a less certain one.
+  void start_calibration(CalibrationPose pose, int64_t t_start_ns, bool mounting_motion = false);
+  /// The mounting motion's window is open.
+  bool watching_mounting_motion() const { return mounting_.active(); }
+  bool capturing() const { return capturer_.capturing(); }
+  double calibration_progress(int64_t t_ns) const { return capturer_.progress(t_ns); }
   /// The outcome of a capture that finished since the last call (applied when ok).
   std::optional<CalibrationResult> take_calibration_result();
 
   /// Uses a saved calibration.
-  void set_calibration(const Calibration& c) { skeleton_.set_calibration(c); }
+  void set_calibration(const Calibration& c);
   /// Heading-only reset (the person stands facing forward).
-  void reset_heading() { skeleton_.reset_heading(); }
+  void reset_heading();
   void set_sensor_live(int i, bool live);
 
+  /// The segments' alignment (mountings and headings with their sources and sigmas).
+  const Alignment& alignment() const { return align_; }
   /// The motion-found heading alignment (6D head and feet).
   const HeadingFromMotion& heading_from_motion() const { return heading_; }
   /// The posture at t_ns.
-  void solve(int64_t t_ns, PoseFrame& out) { skeleton_.solve(t_ns, out); }
+  void solve(int64_t t_ns, PoseFrame& out);
 
   const Skeleton& skeleton() const { return skeleton_; }
   Skeleton& skeleton() { return skeleton_; }
@@ -88,7 +106,7 @@ class BodyTracker {
   const TrackerOptions& options() const { return opt_; }
   /// The sensor's health (its filter's state as the tracker uses it, and its calibration).
   SensorHealth sensor_health(int i) const;
-  /// The sensor's earth-frame orientation as the tracker uses it (9D or 6D output, or an
+  /// The sensor's earth-frame orientation as the tracker uses it (9D or 6D output, held, or an
   /// orientation source's own).
   Eigen::Quaterniond q_earth_sensor(int i) const;
   /// True once sensor i sent its own orientation instead of rates (its filter stays unused).
@@ -101,13 +119,21 @@ class BodyTracker {
   TrackerOptions opt_;
   std::vector<AttitudeFilter> filters_;
   Skeleton skeleton_;
-  Calibrator calibrator_;
+  PoseCapturer capturer_;
+  bool mounting_motion_next_ = false;  ///< the capture in progress is followed by the motion
+  MountingMotion mounting_;
+  Alignment align_;
+  uint64_t align_revision_seen_ = 0;
   std::optional<CalibrationResult> result_;
+  /// The N-pose capture an arm_swing calibration waits to pair with a T-pose.
+  std::optional<PoseCapture> npose_;
   int64_t newest_t_ns_ = 0;
   HeadingFromMotion heading_;
   std::vector<bool> has_mag_;                 ///< per sensor: a magnetometer sample has arrived
   std::vector<bool> is_source_;               ///< per sensor: an orientation source
   std::vector<Eigen::Quaterniond> q_source_;  ///< its newest orientation
+  std::vector<LocalFieldWatch> field_watch_;  ///< per sensor (9D)
+  std::vector<int64_t> prev_t_ns_;            ///< per sensor: its previous sample time
   /// Per segment: its sensor's filter has a heading frame of its own (6D, or no magnetometer).
   std::array<bool, kSegmentCount> own_heading_frames() const;
   int64_t heading_applied_t_ns_ = 0;
@@ -134,19 +160,23 @@ class BodyTracker {
   /// how far it has been turned so far, rad.
   std::array<bool, kSegmentCount> refine_{};
   std::array<double, kSegmentCount> turned_rad_{};
-  /// q_earth_sensor(i) and sensor_health(i) from the filter's output o.
+  /// The sensor's orientation as its segment uses it (step 3), from the filter's output o.
   Eigen::Quaterniond q_earth_sensor(int i, const FilterOutput& o) const;
   SensorHealth sensor_health(int i, const FilterOutput& o) const;
+  /// Step 4: the capture completed; calibrates into the alignment.
+  void finish_calibration();
   void feed_heading_from_motion(int i, const ImuSample& s, const Eigen::Quaterniond& q,
                                 const Eigen::Vector3d& gyro_bias_rad_s);
-  void start_heading_from_motion(const CalibrationResult& r);
+  /// Fits the segments whose facing is unknown (and refines those from a site normal).
+  void start_heading_from_motion();
+  /// The mounting motion's facings: each replaces a less certain one; sensors sharing the earth
+  /// frame vote on the body heading.
+  void apply_motion_facings(const std::array<Facing, kSegmentCount>& facing);
   void apply_heading_from_motion(int64_t t_ns);
-  /// Hands the sensors the calibration found off their site normal to their filters.
+  /// Hands the sensors the calibration found off the body heading to their field watch.
   void suspect_local_fields(const CalibrationResult& r);
-  /// A filter confirmed a local field at calibration and turned its heading by turn_rad.
-  void fix_mounting_after_local_field(int seg, double turn_rad);
-  /// Per sensor: its filter's local-field fixes last seen.
-  std::vector<uint32_t> local_field_fixes_seen_;
+  /// The alignment changed: the skeleton takes its calibration.
+  void publish_alignment();
 };
 
 /// The rig mapping (segment -> sensor index) of a sensor list.

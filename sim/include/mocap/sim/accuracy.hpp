@@ -40,6 +40,9 @@ struct AccuracyOptions {
   /// The calibration procedure includes the calibration moves (knee bends with elbow curls,
   /// make_motion("calibrate+<motion>")) after the N-pose; the evaluation starts after them.
   bool calibration_moves = false;
+  /// The calibration moves are also the mounting motion (rig/mounting_motion.hpp): each
+  /// segment's facing is found from its tilt in them (only with calibration_moves).
+  bool mounting_motion = true;
   /// The sensors run for 22 s of walking and turning before the calibration stand
   /// (make_motion("warmup+...")), as when a person puts them on and walks in.
   bool warmup = false;

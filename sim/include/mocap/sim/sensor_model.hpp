@@ -36,8 +36,11 @@ struct SensorModelParams {
   double mag_scale_sigma = 0.01;
   double mount_misalignment_deg = 5;  ///< extra random mount tilt per axis (1 sigma)
   bool random_mount_roll = true;      ///< strap roll about the surface normal: uniform
-  double jitter_sigma_s = 2e-4;       ///< sample-time jitter (1 sigma, clamped +-40%)
-  double drop_probability = 0.002;    ///< chance each sample is lost in transport
+  /// Strapped anyhow: the sensor's orientation on its segment is uniformly random (any
+  /// rotation; its site stays the standard one), drawn from a stream of its own.
+  bool random_mount_orientation = false;
+  double jitter_sigma_s = 2e-4;     ///< sample-time jitter (1 sigma, clamped +-40%)
+  double drop_probability = 0.002;  ///< chance each sample is lost in transport
   double gravity_m_s2 = 9.80665;
 
   /// No noise, bias, scale error, misalignment, jitter or drops (mounting still off-axis).

@@ -59,6 +59,18 @@ inline Eigen::Quaterniond yaw_rotation(double yaw_rad) {
   return axis_rotation(2, yaw_rad);
 }
 
+/// Earth yaw of a direction (the angle of its horizontal part from +x toward +y), radians in
+/// (-pi, pi]; 0 for a vertical one. The one heading formula of the body side: segment facings,
+/// body headings and every heading turn are measured with it.
+inline double heading_of_rad(const Eigen::Vector3d& v) {
+  return std::atan2(v.y(), v.x());
+}
+
+/// An angle wrapped to [-pi, pi].
+inline double wrap_angle_rad(double a) {
+  return std::remainder(a, 2 * M_PI);
+}
+
 /// Twist of q about the z axis (the "yaw" part in the swing-twist sense), radians in (-pi, pi].
 inline double yaw_of_rad(const Eigen::Quaterniond& q) {
   double a = 2.0 * std::atan2(q.z(), q.w());

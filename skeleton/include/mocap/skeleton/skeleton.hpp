@@ -7,7 +7,7 @@
 // follow their parent. Joint rotations are checked against swing-twist/hinge limits and violations
 // reported per joint, never clamped (real people exceed textbook ranges: docs/skeleton.md); the
 // root moves with the stance foot or is pinned. The solve never changes the calibration; only
-// set_calibration and reset_heading do.
+// set_calibration does (the body tracker's alignment owns it: rig/alignment.hpp).
 //
 // Per-frame work (set_sensor_orientation, solve) never allocates, and is deterministic: identical
 // inputs give bit-identical frames.
@@ -50,9 +50,12 @@ class Skeleton {
   /// calibration compares it with the value at its last save.
   uint64_t calibration_revision() const { return calib_revision_; }
   void clear_calibration() { set_calibration(Calibration{}); }
-  /// Heading-only reset from the latest sensor orientations (the person stands facing forward):
-  /// every segment takes the pelvis's heading, or `target_heading_deg` when given (0 = face +x).
-  void reset_heading(const double* target_heading_deg = nullptr);
+  /// The newest sensor orientation on `segment` (earth frame), and whether it is a live input
+  /// (reported, its sensor not marked silent).
+  const Eigen::Quaterniond& sensor_orientation(int segment) const { return q_es_[segment]; }
+  bool sensor_live(int segment) const {
+    return rig_.tracked(segment) && have_[segment] && !dead_[segment];
+  }
   /// A silent sensor (live = false) stops driving its segment, which is then inferred, until
   /// it is marked live again. Sensors are live by default.
   void set_sensor_live(int segment, bool live);
