@@ -194,4 +194,35 @@ TEST(BlenderLiveLink, FollowsTheStreamRecordsReconnectsAndImportsATake) {
       rs["max_err_deg"].get<double>(), poses.size(), worst, imp["samples"].size());
 }
 
+TEST(BlenderLiveLink, TheStreamClientWaitsForMocapdThenReadsItsPrivateUnixSocket) {
+  ScratchDir dir;
+  const std::string sock = dir.file("pose.sock"), out = dir.file("client.out");
+  const pid_t client = test::spawn(
+      {"/usr/bin/python3", std::string(MOCAP_SOURCE_DIR) + "/tests/blender/stream_check.py",
+       std::string(MOCAP_SOURCE_DIR) + "/blender/mocap_live/stream.py", sock},
+      out);
+  ASSERT_GT(client, 0);
+  for (int i = 0; i < 1000 && test::slurp_file(out).find("waiting") == std::string::npos; ++i)
+    std::this_thread::sleep_for(10ms);
+  {
+    std::ofstream cfg(dir.file("rig.toml"));
+    cfg << "[daemon]\ncontrol_socket = \"" << dir.file("ctl.sock") << "\"\n"
+        << "[outputs.json]\nenabled = true\nunix_socket = \"" << sock << "\"\n"
+        << "[outputs.posture]\nenabled = false\n[demo]\npath = \"direct\"\n";
+  }
+  const pid_t daemon =
+      test::spawn({test::kBinDir + "mocapd", "--config", dir.file("rig.toml"), "--demo"},
+                  dir.file("mocapd.log"));
+  ASSERT_GT(daemon, 0);
+  const int client_status = test::wait_exit(client, 60);
+  ::kill(daemon, SIGTERM);
+  EXPECT_EQ(test::wait_exit(daemon, 30), 0);
+  const std::string text = test::slurp_file(out) + test::slurp_file(out + ".err");
+  EXPECT_EQ(client_status, 0) << text;
+  // Before mocapd: waiting, with the reason (no socket there yet); then connected once.
+  EXPECT_NE(text.find("waiting: no mocapd at " + sock + " ("), std::string::npos) << text;
+  EXPECT_NE(text.find("ok connections=1 frames="), std::string::npos) << text;
+  EXPECT_NE(text.find(" bad_lines=0 state=stopped"), std::string::npos) << text;
+}
+
 }  // namespace mocap

@@ -190,7 +190,8 @@ int run_setup(const SetupOptions& o) {
     } else if (!cands[i].optional) {
       std::string tried;
       for (const auto& p : cands[i].probes)
-        tried += (tried.empty() ? "" : ", ") + p.driver;
+        tried += (tried.empty() ? "" : ", ") + p.driver +
+                 (p.baud > 0 ? " at " + std::to_string(p.baud) + " baud" : "");
       say("  silent: %s (no samples as %s)", cands[i].what.c_str(), tried.c_str());
       left_out.push_back(cands[i].what + " (silent)");
     }
