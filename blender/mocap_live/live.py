@@ -19,7 +19,7 @@ class LiveLink:
     def __init__(self):
         self.stream = None
         self.binding = None
-        self.last_frame = None  # newest frame received (a dict)
+        self.last_frame = None  # newest frame received (a stream.Frame)
         self.applied_frame = None  # the frame counter last put on the armature
         self.recording = None  # frames kept since Record, or None
         self.record_wall_start = 0.0
@@ -107,7 +107,7 @@ class LiveLink:
                 binding = self.bind(context, frames[-1])
                 if binding is not None:
                     binding.apply(frames[-1])
-                    self.applied_frame = frames[-1]["frame"]
+                    self.applied_frame = frames[-1].frame
             except ReferenceError:  # the armature went away under us
                 self.binding = None
         self._redraw_if_changed()

@@ -26,9 +26,8 @@ def body_offsets(frame):
     """Each segment's joint offset from its parent's joint in the parent's frame (our axes,
     metres), from one frame's positions and orientations; the pelvis: its joint above the
     floor."""
-    segs = frame["segments"]
-    q = [Quaternion(s["q"]) for s in segs]
-    p = [Vector(s["p"]) for s in segs]
+    q = [Quaternion(frame.q(i)) for i in range(len(cv.SEGMENTS))]
+    p = [Vector(frame.p(i)) for i in range(len(cv.SEGMENTS))]
     out = []
     for i in range(len(cv.SEGMENTS)):
         par = cv.PARENT[i]
@@ -159,7 +158,7 @@ class Binding:
                 tuple(tuple(r) for r in obj.matrix_world), len(obj.data.bones))
 
     def _root_head_armature(self, frame):
-        p = cv.to_blender_vec(frame["segments"][0]["p"])
+        p = cv.to_blender_vec(frame.p(0))
         if self.ours:
             return p  # our armature's space is the stream's (metres, Blender axes)
         v = Vector((p.x, p.y, p.z - self.rest_pelvis_m)) * self.scale
@@ -168,7 +167,6 @@ class Binding:
     def solve(self, frame):
         """{bone: (location or None, rotation Quaternion)} for the frame: the local (basis)
         values of every mapped bone; a location only for the root-motion bone."""
-        segs = frame["segments"]
         pose_bones = self.obj.pose.bones
         posed = {}
         out = {}
@@ -179,7 +177,7 @@ class Binding:
             if i is None:
                 posed[n] = base @ pose_bones[n].matrix_basis
                 continue
-            rot = self.m_rot_inv @ cv.to_blender_quat(segs[i]["q"]) @ self.post[n]
+            rot = self.m_rot_inv @ cv.to_blender_quat(frame.q(i)) @ self.post[n]
             moves = self.root_motion and n == self.root_bone
             head = self._root_head_armature(frame) if moves else base.to_translation()
             desired = Matrix.Translation(head) @ rot.to_matrix().to_4x4()

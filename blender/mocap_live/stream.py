@@ -9,6 +9,7 @@ RETRY_S seconds until stop(). Standard library only (no bpy), so plain python3 c
 """
 import collections
 import json
+from array import array
 import socket
 import threading
 import time
@@ -17,6 +18,47 @@ RETRY_S = 0.5  # between connection attempts while mocapd is away
 READ_TIMEOUT_S = 0.25  # how often the reader looks at its stop flag
 MAX_QUEUED = 1 << 15  # frames kept for the main thread (about 4.5 min at 120 Hz)
 MAX_LINE = 64 * 1024  # longer than any line mocapd writes (16 KiB): a foreign server
+
+
+SEGMENT_COUNT = 16
+
+
+class Frame:
+    """One pose, kept small (a take holds many): its counter, times, flags, and each segment's
+    q_earth_segment (w, x, y, z) and joint position p (metres) in one array of doubles, in the
+    stream's segment order. Built from a parsed line; raises ValueError if it is not a pose."""
+    __slots__ = ("frame", "t_ns", "t_unix_ns", "flags", "values")
+
+    def __init__(self, line):
+        try:
+            if line["v"] != 1:
+                raise ValueError("pose stream version %r is not known (1 is)" % line["v"])
+            self.frame = int(line["frame"])
+            self.t_ns = int(line["t_ns"])
+            t_unix = line.get("t_unix_ns")
+            self.t_unix_ns = int(t_unix) if t_unix is not None else None
+            self.flags = int(line.get("flags", 0))
+            segments = line["segments"]
+            if len(segments) != SEGMENT_COUNT:
+                raise ValueError("%d segments, not %d" % (len(segments), SEGMENT_COUNT))
+            values = array("d")
+            for seg in segments:
+                q, p = seg["q"], seg["p"]
+                if len(q) != 4 or len(p) != 3:
+                    raise ValueError("a segment without q[4] and p[3]")
+                values.extend(q)  # a null (a non-finite value) raises TypeError
+                values.extend(p)
+        except (KeyError, TypeError, AttributeError) as e:
+            raise ValueError("not a pose line (%s: %s)" % (type(e).__name__, e)) from e
+        self.values = values
+
+    def q(self, i):
+        """Segment i's q_earth_segment, (w, x, y, z)."""
+        return self.values[7 * i:7 * i + 4]
+
+    def p(self, i):
+        """Segment i's joint position, metres."""
+        return self.values[7 * i + 4:7 * i + 7]
 
 
 class PoseStream:
@@ -62,7 +104,7 @@ class PoseStream:
         self._set("stopped", "not connected")
 
     def take_frames(self):
-        """Every frame parsed since the last call, oldest first (a list of dicts)."""
+        """Every frame parsed since the last call, oldest first (a list of Frame)."""
         with self._lock:
             out = list(self._frames)
             self._frames.clear()
@@ -133,11 +175,15 @@ class PoseStream:
             parsed = []
             for line in lines:
                 try:
-                    frame = json.loads(line)
-                    if frame.get("v") != 1:
-                        return "pose stream version %r is not known (1 is)" % frame.get("v")
-                    parsed.append(frame)
-                except (ValueError, AttributeError):
+                    d = json.loads(line)
+                except ValueError:
+                    self.bad_lines += 1
+                    continue
+                if isinstance(d, dict) and d.get("v") != 1:
+                    return "pose stream version %r is not known (1 is)" % d.get("v")
+                try:
+                    parsed.append(Frame(d))
+                except ValueError:
                     self.bad_lines += 1
             if parsed:
                 with self._lock:

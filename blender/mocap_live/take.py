@@ -22,6 +22,7 @@ import tempfile
 import bpy
 
 from . import convention as cv
+from .stream import Frame
 
 EXPORT_TIMEOUT_S = 600
 
@@ -47,8 +48,8 @@ def build_action(binding, frames, name, scene, source):
         raise ValueError("no frames to key")
     fps = scene.render.fps / scene.render.fps_base
     frame_start = float(scene.frame_current)
-    t0 = frames[0]["t_ns"]
-    xs = [frame_start + (f["t_ns"] - t0) * 1e-9 * fps for f in frames]
+    t0 = frames[0].t_ns
+    xs = [frame_start + (f.t_ns - t0) * 1e-9 * fps for f in frames]
     solved = [binding.solve(f) for f in frames]
     action = bpy.data.actions.new(name)
     for bone in binding.mapped:
@@ -69,14 +70,14 @@ def build_action(binding, frames, name, scene, source):
             for k in range(3):
                 fc = _fcurve(action, path + ".location", k, group, len(frames))
                 _fill(fc, xs, [s[bone][0][k] for s in solved])
-    t_unix = frames[0].get("t_unix_ns")
+    t_unix = frames[0].t_unix_ns
     action["mocap_t_unix_ns"] = str(t_unix) if t_unix is not None else ""
     action["mocap_t_unix_s"] = t_unix * 1e-9 if t_unix is not None else 0.0
     action["mocap_frame_start"] = frame_start
     action["mocap_fps"] = fps
     action["mocap_frames"] = len(frames)
-    action["mocap_first_frame"] = int(frames[0]["frame"]) & 0x7FFFFFFF
-    action["mocap_last_frame"] = int(frames[-1]["frame"]) & 0x7FFFFFFF
+    action["mocap_first_frame"] = frames[0].frame & 0x7FFFFFFF
+    action["mocap_last_frame"] = frames[-1].frame & 0x7FFFFFFF
     action["mocap_source"] = source
     obj = binding.obj
     if obj.animation_data is None:
@@ -106,8 +107,11 @@ def read_take(mocap, session_path):
             raise RuntimeError((r.stderr or r.stdout).strip() or "mocap export failed")
         frames = []
         with open(out, encoding="utf-8") as f:
-            for line in f:
-                frames.append(json.loads(line))
+            for n, line in enumerate(f, 1):
+                try:
+                    frames.append(Frame(json.loads(line)))
+                except ValueError as e:
+                    raise RuntimeError("mocap export's line %d: %s" % (n, e)) from e
         return frames, r.stderr.strip()
 
 

@@ -188,7 +188,7 @@ def check_ours(reader, frames_wanted, label):
 # -- live: our armature follows the stream --------------------------------------------------------
 # The demo performer stands in the N-pose for 3 s, calibrates, then bends knees and elbows:
 # compare while it moves.
-tick_until(lambda: live.LINK.last_frame["flags"] & 1, 30, "the demo's calibration")
+tick_until(lambda: live.LINK.last_frame.flags & 1, 30, "the demo's calibration")
 results["live"] = check_ours(own, 90, "live")
 
 # -- retarget: a Mixamo-named T-pose armature ---------------------------------------------------
@@ -233,7 +233,7 @@ results["retarget_preset"] = settings.preset
 mapped = {i.segment: i.bone for i in settings.bone_map}
 worst = 0.0
 checked = 0
-seen = set()
+seen = {live.LINK.applied_frame}  # shown on our armature, not this one
 end = time.monotonic() + 20
 while checked < 30 and time.monotonic() < end:
     live.LINK.tick()
@@ -266,18 +266,18 @@ recorded = list(live.LINK.recording)
 if "FINISHED" not in bpy.ops.mocap.record():
     fail("stopping the recording failed")
 action = arm.animation_data.action
-numbers = [f["frame"] for f in recorded]
+numbers = [f.frame for f in recorded]
 expected = [n for n in range(numbers[0], numbers[-1] + 1) if own.get(n, 0.5) is not None]
 fc = action.fcurves.find('pose.bones["Hips"].rotation_quaternion', index=0)
 keys = [k.co[0] for k in fc.keyframe_points]
 fps = action["mocap_fps"]
-key_times_err = max(abs((keys[k] - keys[0]) / fps - (recorded[k]["t_ns"] - recorded[0]["t_ns"]) * 1e-9)
+key_times_err = max(abs((keys[k] - keys[0]) / fps - (recorded[k].t_ns - recorded[0].t_ns) * 1e-9)
                     for k in range(len(keys)))
 results["record"] = {
     "frames": action["mocap_frames"], "keys": len(keys), "stream_frames_in_span": len(expected),
-    "contiguous": numbers == expected, "duration_s": (recorded[-1]["t_ns"] - recorded[0]["t_ns"]) * 1e-9,
+    "contiguous": numbers == expected, "duration_s": (recorded[-1].t_ns - recorded[0].t_ns) * 1e-9,
     "key_time_err_s": key_times_err, "t_unix_ns": action["mocap_t_unix_ns"],
-    "first_t_unix_ns": str(recorded[0]["t_unix_ns"]), "fcurves": len(action.fcurves),
+    "first_t_unix_ns": str(recorded[0].t_unix_ns), "fcurves": len(action.fcurves),
     "wall_s": time.monotonic() - t_start}
 
 # -- restart: mocapd quits, comes back (the C++ side restarts it), the add-on follows -----------
@@ -292,11 +292,11 @@ states = []
 tick_until(lambda: states.append(live.LINK.status()[0]) or states[-1] == "waiting", 20,
            "the add-on to notice mocapd left")
 waiting_message = live.LINK.status()[1]
-last_before = live.LINK.last_frame["frame"]
+last_before = live.LINK.last_frame.frame
 # The new daemon's frame counter starts again at 1 (the old one may still serve a moment while
 # it shuts down, and the add-on may catch it once more: the counter tells them apart).
 tick_until(lambda: live.LINK.stream.connections > conn_before and live.LINK.status()[0] == "connected"
-           and live.LINK.last_frame["frame"] < last_before, 60, "the add-on to follow the new mocapd")
+           and live.LINK.last_frame.frame < last_before, 60, "the add-on to follow the new mocapd")
 own2 = None
 end = time.monotonic() + 20
 while own2 is None and time.monotonic() < end:
@@ -314,8 +314,10 @@ bpy.context.preferences.addons["mocap_live"].preferences.mocap_program = mocap
 bpy.ops.mocap.connect()  # the same button disconnects
 if live.LINK.connected():
     fail("the connect button did not disconnect")
+t_import = time.monotonic()
 if "FINISHED" not in bpy.ops.mocap.import_take(filepath=take_path):
     fail("import_take failed")
+import_s = time.monotonic() - t_import
 imp = arm.animation_data.action
 fc = imp.fcurves.find('pose.bones["Hips"].rotation_quaternion', index=0)
 keys = [k.co[0] for k in fc.keyframe_points]
@@ -335,7 +337,11 @@ for k in sorted({0, n_keys // 4, n_keys // 2, (3 * n_keys) // 4, n_keys - 1}):
     samples.append({"key": k, "bones": bones})
 results["import"] = {"frames": imp["mocap_frames"], "keys": n_keys, "name": imp.name,
                      "first_frame": first_frame, "last_frame": imp["mocap_last_frame"],
-                     "t_unix_ns": imp["mocap_t_unix_ns"], "samples": samples}
+                     "t_unix_ns": imp["mocap_t_unix_ns"], "samples": samples, "seconds": import_s}
+# The add-on comes off cleanly (unregister: disconnects, removes its classes and properties).
+if "FINISHED" not in bpy.ops.preferences.addon_disable(module="mocap_live"):
+    fail("addon_disable failed")
+results["disabled"] = not hasattr(bpy.types.Scene, "mocap_live")
 with open(result_path, "w") as out:
     json.dump(results, out, indent=1)
 print("live link check: done")

@@ -27,10 +27,10 @@ while len(frames) < 60 and time.monotonic() < end:
 s.stop()
 if len(frames) < 60:
     sys.exit("only %d frames" % len(frames))
-counters = [f["frame"] for f in frames]
+counters = [f.frame for f in frames]
 if any(b <= a for a, b in zip(counters, counters[1:])):
     sys.exit("frame counters not increasing: %r" % counters)
-if any(len(f["segments"]) != 16 or f["v"] != 1 for f in frames):
+if any(len(f.values) != 16 * 7 for f in frames):
     sys.exit("a frame without 16 segments")
 print("ok connections=%d frames=%d bad_lines=%d state=%s" %
       (s.connections, len(frames), s.bad_lines, s.status()[0]), flush=True)
