@@ -80,6 +80,7 @@ TEST(RigWriter, WritesARigMocapdAccepts) {
   plan.sensors = {a, b, c};
   plan.left_out = {"SlimeVR tracker 02:5E:00:00:00:09"};
   plan.no_sensor = {"neck"};
+  plan.silent = {"serial port /dev/ttyUSB7"};
   plan.use_mag = false;
   plan.calibration_file = "rig-calibration.toml";
   const std::string text = rig_toml(plan);
@@ -100,6 +101,7 @@ TEST(RigWriter, WritesARigMocapdAccepts) {
   EXPECT_NE(text.find("# heard but never moved alone, left out: SlimeVR tracker 02:5E:00:00:00:09"),
             std::string::npos);
   EXPECT_NE(text.find("# no sensor moved for segment neck"), std::string::npos);
+  EXPECT_NE(text.find("# found but sent nothing: serial port /dev/ttyUSB7"), std::string::npos);
 }
 
 TEST(SetupCandidates, APortIsProbedUnlessItsDriverIsNamed) {

@@ -60,6 +60,9 @@ constexpr Ask kAsks[] = {
     {Segment::pelvis, "turn your hips left and right"},
 };
 
+/// After this long without a decision the user is reminded of the answers.
+constexpr auto kRemindAfter = std::chrono::seconds(8);
+
 /// mocap setup's command line (declared in add_setup).
 struct SetupOptions {
   std::string out = "rig.toml";
@@ -175,7 +178,7 @@ int run_setup(const SetupOptions& o) {
   const auto& cands = listener.candidates();
   std::vector<int> label(cands.size(), 0);  // s1, s2, ... for the sensors heard
   int heard = 0;
-  std::vector<std::string> left_out;
+  std::vector<std::string> left_out, silent;
   for (std::size_t i = 0; i < cands.size(); ++i) {
     if (listener.heard(i)) label[i] = ++heard;
   }
@@ -193,7 +196,7 @@ int run_setup(const SetupOptions& o) {
         tried += (tried.empty() ? "" : ", ") + p.driver +
                  (p.baud > 0 ? " at " + std::to_string(p.baud) + " baud" : "");
       say("  silent: %s (no samples as %s)", cands[i].what.c_str(), tried.c_str());
-      left_out.push_back(cands[i].what + " (silent)");
+      silent.push_back(cands[i].what);
     }
   }
   if (heard == 0) {
@@ -232,6 +235,7 @@ int run_setup(const SetupOptions& o) {
     const auto started = std::chrono::steady_clock::now();
     auto next = started + window;
     bool settling = false;  // after "two at once": waiting for stillness before asking again
+    bool reminded = false;
     std::size_t next_k = k + 1;
     for (;;) {
       std::this_thread::sleep_until(next);
@@ -292,8 +296,13 @@ int run_setup(const SetupOptions& o) {
         settling = true;
         continue;
       }
-      if (o.timeout_s > 0 &&
-          std::chrono::steady_clock::now() - started > std::chrono::duration<double>(o.timeout_s)) {
+      const auto waited = std::chrono::steady_clock::now() - started;
+      if (!reminded && waited > kRemindAfter) {
+        reminded = true;
+        say("nothing moved alone yet for %s: move it more, or Enter if it has no sensor",
+            seg.c_str());
+      }
+      if (o.timeout_s > 0 && waited > std::chrono::duration<double>(o.timeout_s)) {
         say("skipped %s: no sensor moved alone in %.0f s", seg.c_str(), o.timeout_s);
         skipped[index(ask.segment)] = true;
         break;
@@ -323,6 +332,7 @@ int run_setup(const SetupOptions& o) {
     }
   }
   plan.left_out = left_out;
+  plan.silent = silent;
   plan.use_mag = all_mag;
   if (plan.sensors.empty()) {
     say("no sensor was assigned: no rig written");
@@ -358,8 +368,8 @@ int run_setup(const SetupOptions& o) {
         errors.errors.size() == 1 ? "" : "s");
     return 1;
   }
-  say("checked %s: OK (%zu sensors); run it with: mocapd --config %s", o.out.c_str(),
-      cfg->sensors.size(), o.out.c_str());
+  say("checked %s: OK (%zu sensor%s); run it with: mocapd --config %s", o.out.c_str(),
+      cfg->sensors.size(), cfg->sensors.size() == 1 ? "" : "s", o.out.c_str());
   return 0;
 }
 

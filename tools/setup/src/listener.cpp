@@ -12,7 +12,7 @@ Listener::Listener(std::vector<Candidate> candidates, Logger log)
     : candidates_(std::move(candidates)), log_(std::move(log)), meter_(candidates_.size()) {
   for (std::size_t i = 0; i < candidates_.size(); ++i) {
     daemon::SensorConfig s = candidates_[i].sensor;
-    s.name = "c" + std::to_string(i);
+    s.name = candidates_[i].what;  // only for the drivers' log lines
     cfg_.sensors.push_back(std::move(s));
   }
 }
@@ -35,7 +35,7 @@ void Listener::open(std::size_t leader) {
   }
   try {
     const DeviceSpec spec = daemon::device_spec(cfg_, leader);
-    auto dev = make_device(spec, log_.child(cfg_.sensors[leader].name, log_.level()));
+    auto dev = make_device(spec, log_.child("device", log_.level()));
     dev->start(meter_);
     devices_[leader] = std::move(dev);
   } catch (const std::exception& e) {
@@ -75,7 +75,19 @@ void Listener::probe(double probe_s, const std::function<void(const std::string&
       open(i);
       reopened = true;
     }
-    if (!reopened) return;
+    if (!reopened) break;
+  }
+  // A device that gave nothing with any setting is closed (no retrying in the background).
+  for (auto it = devices_.begin(); it != devices_.end();) {
+    bool any = false;
+    for (std::size_t i = 0; i < candidates_.size(); ++i)
+      any = any || (daemon::device_leader(cfg_, i) == it->first && heard(i));
+    if (any) {
+      ++it;
+    } else {
+      it->second->stop();
+      it = devices_.erase(it);
+    }
   }
 }
 

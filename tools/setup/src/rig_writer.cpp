@@ -45,6 +45,8 @@ std::string rig_toml(const RigPlan& plan) {
        "# Check it with `mocapd --check-config FILE`, run it with `mocapd --config FILE`.\n";
   for (const auto& s : plan.left_out)
     t << "# heard but never moved alone, left out: " << s << "\n";
+  for (const auto& s : plan.silent)
+    t << "# found but sent nothing: " << s << "\n";
   for (const auto& s : plan.no_sensor)
     t << "# no sensor moved for segment " << s << "\n";
   t << "\n[pipeline]\nrate_hz = 120\n";

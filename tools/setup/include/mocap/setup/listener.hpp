@@ -27,8 +27,8 @@ class Listener {
   Listener& operator=(const Listener&) = delete;
 
   /// Opens every candidate, waits `probe_s`, reopens the silent ones with their next probe,
-  /// and so on; returns once every candidate gave samples or has no probe left. `progress` is
-  /// told of each reopening.
+  /// and so on; returns once every candidate gave samples or has no probe left, with the
+  /// devices that gave nothing closed. `progress` is told of each reopening.
   void probe(double probe_s, const std::function<void(const std::string&)>& progress = {});
   /// Whether candidate i gave samples.
   bool heard(std::size_t i) const { return meter_.seen(i).samples > 0; }
@@ -41,7 +41,7 @@ class Listener {
   void open(std::size_t leader);
 
   std::vector<Candidate> candidates_;
-  daemon::Config cfg_;  ///< one sensor per candidate, named c0, c1, ...
+  daemon::Config cfg_;  ///< one sensor per candidate, named by its `what` (for log lines)
   Logger log_;
   MotionMeter meter_;
   std::map<std::size_t, std::unique_ptr<Device>> devices_;  ///< by leader sensor
