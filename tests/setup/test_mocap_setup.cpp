@@ -320,6 +320,7 @@ TEST(MocapSetup, AssignsEverySensorByMotionAndMocapdRunsTheRig) {
       {Segment::pelvis}};
   const double amplitude_deg[] = {20, 35, 50, 65, 80};
   std::string report;
+  double still_worst = 0;  // the most a segment turned that should have stayed still
   for (const auto& group : groups) {
     while (!performer.resting())
       std::this_thread::sleep_for(10ms);
@@ -349,8 +350,11 @@ TEST(MocapSetup, AssignsEverySensorByMotionAndMocapdRunsTheRig) {
       double expected = 0;  // the amplitude of the turning joint it hangs from, if any
       for (std::size_t g = 0; g < group.size(); ++g)
         if (below(k, index(group[g]))) expected = amplitude_deg[g];
-      EXPECT_NEAR(turned[k], expected, 6.0)
+      // 3 deg and 6 %: the filters' overshoot on a 1000 deg/s nod stays inside, and the
+      // amplitudes' windows (15 deg apart) do not touch.
+      EXPECT_NEAR(turned[k], expected, 3.0 + 0.06 * expected)
           << kSegmentNames[k] << " in the group of " << kSegmentNames[index(group[0])];
+      if (expected == 0) still_worst = std::max(still_worst, turned[k]);
     }
     for (const Segment seg : group) {
       char b[64];
@@ -362,10 +366,10 @@ TEST(MocapSetup, AssignsEverySensorByMotionAndMocapdRunsTheRig) {
   EXPECT_EQ(test::wait_exit(daemon, 30), 0);
   std::printf(
       "[figures] mocap setup: %zu lines in %.1f s; mocapd on its rig, %.1f s: each segment "
-      "turned by (deg; asked 20, 35, 50, 65, 80 within a group):%s\n",
+      "turned by (deg; asked 20, 35, 50, 65, 80 within a group):%s; still ones at most %.2f\n",
       lines.size(), setup_s,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_mocapd).count(),
-      report.c_str());
+      report.c_str(), still_worst);
 }
 
 }  // namespace mocap
