@@ -21,6 +21,7 @@ MAX_LINE = 64 * 1024  # longer than any line mocapd writes (16 KiB): a foreign s
 
 
 SEGMENT_COUNT = 16
+DEFAULT_PERIOD_NS = 8_333_333  # one frame at mocapd's default 120 Hz
 
 
 class Frame:
@@ -59,6 +60,27 @@ class Frame:
     def p(self, i):
         """Segment i's joint position, metres."""
         return self.values[7 * i + 4:7 * i + 7]
+
+
+def frame_times_s(frames):
+    """Each frame's time since the first, seconds, from its t_ns. Should the stream's time jump
+    back (another mocapd on another machine, a replay, then live again) the frames after the
+    jump continue one frame period after the frame before it: keys stay in order."""
+    out = []
+    offset = 0
+    prev = None
+    period = DEFAULT_PERIOD_NS
+    for f in frames:
+        t = f.t_ns + offset
+        if prev is not None:
+            if t <= prev:
+                offset += prev + period - t
+                t = prev + period
+            else:
+                period = t - prev
+        out.append((t - frames[0].t_ns) * 1e-9)
+        prev = t
+    return out
 
 
 class PoseStream:
@@ -173,6 +195,7 @@ class PoseStream:
             if len(buf) > MAX_LINE:
                 return "a line longer than %d bytes: not a mocapd pose stream" % MAX_LINE
             parsed = []
+            refused = None
             for line in lines:
                 try:
                     d = json.loads(line)
@@ -180,7 +203,8 @@ class PoseStream:
                     self.bad_lines += 1
                     continue
                 if isinstance(d, dict) and d.get("v") != 1:
-                    return "pose stream version %r is not known (1 is)" % d.get("v")
+                    refused = "pose stream version %r is not known (1 is)" % d.get("v")
+                    break
                 try:
                     parsed.append(Frame(d))
                 except ValueError:
@@ -192,6 +216,8 @@ class PoseStream:
                         self.dropped += len(parsed) - room
                     self._frames.extend(parsed)
                     self.frames_received += len(parsed)
+            if refused:
+                return refused
         return "stopped"
 
 

@@ -22,7 +22,7 @@ import tempfile
 import bpy
 
 from . import convention as cv
-from .stream import Frame
+from .stream import Frame, frame_times_s
 
 EXPORT_TIMEOUT_S = 600
 
@@ -48,8 +48,7 @@ def build_action(binding, frames, name, scene, source):
         raise ValueError("no frames to key")
     fps = scene.render.fps / scene.render.fps_base
     frame_start = float(scene.frame_current)
-    t0 = frames[0].t_ns
-    xs = [frame_start + (f.t_ns - t0) * 1e-9 * fps for f in frames]
+    xs = [frame_start + t * fps for t in frame_times_s(frames)]
     solved = [binding.solve(f) for f in frames]
     action = bpy.data.actions.new(name)
     for bone in binding.mapped:

@@ -32,19 +32,33 @@ class MOCAP_AddonPreferences(bpy.types.AddonPreferences):
         self.layout.prop(self, "mocap_program")
 
 
+_filling = False  # the map is being filled from a preset (not edited by the user)
+
+
+def _bone_edited(self, context):
+    if not _filling and context.scene.mocap_live.preset != "CUSTOM":
+        context.scene.mocap_live.preset = "CUSTOM"  # keeps the map as edited
+
+
 class MOCAP_MapItem(bpy.types.PropertyGroup):
     segment: StringProperty(name="Segment")
-    bone: StringProperty(name="Bone", description="The target armature's bone for this segment")
+    bone: StringProperty(name="Bone", description="The target armature's bone for this segment",
+                         update=_bone_edited)
 
 
 def _fill_map(settings, preset):
+    global _filling
     obj = settings.target
     names = [b.name for b in obj.data.bones] if obj else []
     mapping = cv.preset_map(preset, names) if obj else {s: "" for s in cv.SEGMENTS}
-    settings.bone_map.clear()
-    for seg in cv.SEGMENTS:
-        item = settings.bone_map.add()
-        item.segment, item.bone = seg, mapping[seg]
+    _filling = True
+    try:
+        settings.bone_map.clear()
+        for seg in cv.SEGMENTS:
+            item = settings.bone_map.add()
+            item.segment, item.bone = seg, mapping[seg]
+    finally:
+        _filling = False
 
 
 def _preset_changed(self, context):

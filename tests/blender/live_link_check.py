@@ -6,7 +6,8 @@
 #            pose vs A q A^-1 with A = -90 deg about z (our x fwd, y left, z up -> Blender's
 #            character facing -Y: (w, x, y, z) -> (w, y, -x, z)), and the joint positions;
 #   retarget a Mixamo-named armature in a T-pose (object turned 90 deg about x, scale 0.01, as
-#            an FBX import has it): each mapped bone's direction vs our segment's direction;
+#            an FBX import has it), and Blender's Rigify human meta-rig: each mapped bone's
+#            direction vs our segment's direction;
 #   record   Record / Stop over 2 s: the Action's keys against the frames this script saw;
 #   restart  mocapd is told to quit (the C++ side starts it again): the add-on's state goes to
 #            waiting and back to connected, and the bones follow the new daemon;
@@ -227,32 +228,50 @@ def make_mixamo():
     return obj
 
 
-mix = make_mixamo()
-settings.target = mix
-results["retarget_preset"] = settings.preset
-mapped = {i.segment: i.bone for i in settings.bone_map}
-worst = 0.0
-checked = 0
-seen = {live.LINK.applied_frame}  # shown on our armature, not this one
-end = time.monotonic() + 20
-while checked < 30 and time.monotonic() < end:
-    live.LINK.tick()
-    time.sleep(1 / 60)
-    n = live.LINK.applied_frame
-    if n is None or n in seen:
-        continue
-    seen.add(n)
-    f = own.get(n)
-    bpy.context.view_layer.update()
-    mq = mix.matrix_world.to_quaternion()
-    for i, seg in enumerate(f["segments"]):
-        pb = mix.pose.bones[mapped[seg["name"]]]
-        direction = mq @ (pb.matrix.to_quaternion() @ Vector((0, 1, 0)))
-        want = ours_q(seg["q"]) @ convention.npose_direction(seg["name"])
-        worst = max(worst, vector_angle_deg(direction, want))
-    checked += 1
-results["retarget"] = {"frames_checked": checked, "max_dir_err_deg": worst,
-                       "mapped": sum(1 for b in mapped.values() if b)}
+# Where each segment points in our N-pose, our axes (x fwd, y left, z up), written out here:
+# trunk and head up (the head a little forward, as the body model's end offset), arms and legs
+# down, feet forward and a little down.
+NPOSE = {"pelvis": (0, 0, 1), "torso": (0, 0, 1), "neck": (0, 0, 1), "head": (0.02, 0, 0.12),
+         "foot_l": (0.110, 0, -0.039), "foot_r": (0.110, 0, -0.039)}
+
+
+def check_retarget(obj, frames_wanted):
+    """Every mapped bone of obj points where its segment points, frame by frame."""
+    settings.target = obj
+    preset = settings.preset
+    mapped = {i.segment: i.bone for i in settings.bone_map if i.bone}
+    worst = 0.0
+    checked = 0
+    seen = {live.LINK.applied_frame}  # shown on the armature before, not this one
+    end = time.monotonic() + 20
+    while checked < frames_wanted and time.monotonic() < end:
+        live.LINK.tick()
+        time.sleep(1 / 60)
+        n = live.LINK.applied_frame
+        if n is None or n in seen:
+            continue
+        seen.add(n)
+        f = own.get(n)
+        bpy.context.view_layer.update()
+        mq = obj.matrix_world.to_quaternion()
+        for seg in f["segments"]:
+            if seg["name"] not in mapped:
+                continue
+            pb = obj.pose.bones[mapped[seg["name"]]]
+            direction = mq @ (pb.matrix.to_quaternion() @ Vector((0, 1, 0)))
+            want = ours_q(seg["q"]) @ ours_v(NPOSE.get(seg["name"], (0, 0, -1))).normalized()
+            worst = max(worst, vector_angle_deg(direction, want))
+        checked += 1
+    return {"preset": preset, "frames_checked": checked, "max_dir_err_deg": worst,
+            "mapped": len(mapped)}
+
+
+results["retarget"] = check_retarget(make_mixamo(), 30)
+# Blender's human meta-rig (the Rigify add-on Debian's Blender ships).
+bpy.ops.preferences.addon_enable(module="rigify")
+bpy.ops.object.select_all(action="DESELECT")
+bpy.ops.object.armature_human_metarig_add()
+results["rigify"] = check_retarget(bpy.context.view_layer.objects.active, 30)
 settings.target = arm
 
 # -- record 2 s into an Action ----------------------------------------------------------------

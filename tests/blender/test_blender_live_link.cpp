@@ -3,7 +3,7 @@
 // the zip CMake built, connects it to the pose stream, and reports what it measured; this test
 // starts mocapd (a free port, its own runtime directory, a take recorded from the start),
 // restarts it when the script makes it quit (as systemd would), and checks the figures: bones
-// within 0.1 deg of the frames the script read itself, a retargeted Mixamo-named armature, 2 s
+// within 0.1 deg of the frames the script read itself, retargeted Mixamo and Rigify armatures, 2 s
 // recorded into an Action with every frame of the span, a reconnect after the restart, and the
 // imported take's bone rotations against the session file read here with SessionReader.
 #include <gtest/gtest.h>
@@ -133,11 +133,15 @@ TEST(BlenderLiveLink, FollowsTheStreamRecordsReconnectsAndImportsATake) {
   EXPECT_LT(live["max_err_deg"].get<double>(), 0.1);
   EXPECT_LT(live["max_pos_err_m"].get<double>(), 1e-3);
   EXPECT_GT(live["max_motion_deg"].get<double>(), 5.0);  // the performer moved meanwhile
-  // Retarget: a Mixamo-named T-pose armature, found by its names, every bone along its segment.
-  EXPECT_EQ(r["retarget_preset"], "MOCAP");  // our bone names are Mixamo's, without the prefix
-  EXPECT_EQ(r["retarget"]["mapped"], 16);
-  EXPECT_GE(r["retarget"]["frames_checked"].get<int>(), 20);
-  EXPECT_LT(r["retarget"]["max_dir_err_deg"].get<double>(), 0.1);
+  // Retarget: a Mixamo-named T-pose armature and Rigify's meta-rig, found by their names,
+  // every bone along its segment.
+  EXPECT_EQ(r["retarget"]["preset"], "MOCAP");  // our bone names are Mixamo's, less the prefix
+  EXPECT_EQ(r["rigify"]["preset"], "RIGIFY");
+  for (const char* rig : {"retarget", "rigify"}) {
+    EXPECT_EQ(r[rig]["mapped"], 16) << rig;
+    EXPECT_GE(r[rig]["frames_checked"].get<int>(), 20) << rig;
+    EXPECT_LT(r[rig]["max_dir_err_deg"].get<double>(), 0.1) << rig;
+  }
   // Record: 2 s, every frame of the stream in that span keyed once, at its own time.
   const auto& rec = r["record"];
   EXPECT_TRUE(rec["contiguous"].get<bool>());
@@ -186,14 +190,28 @@ TEST(BlenderLiveLink, FollowsTheStreamRecordsReconnectsAndImportsATake) {
   EXPECT_TRUE(r["disabled"].get<bool>());
   std::printf(
       "[figures] live: %d frames, worst %.4f deg (%s), %.2g m (performer moved %.0f deg); Mixamo "
-      "retarget worst %.4f deg; record: %d frames in %.3f s; after restart %d frames, worst "
+      "retarget worst %.4f deg, Rigify %.4f deg; record: %d frames in %.3f s; after restart %d "
+      "frames, worst "
       "%.4f deg; import: %zu poses in %.2f s, worst %.4f deg at %zu keys\n",
       live["frames_checked"].get<int>(), live["max_err_deg"].get<double>(),
       live["worst_bone"].get<std::string>().c_str(), live["max_pos_err_m"].get<double>(),
       live["max_motion_deg"].get<double>(), r["retarget"]["max_dir_err_deg"].get<double>(),
-      rec["frames"].get<int>(), rec["duration_s"].get<double>(), rs["frames_checked"].get<int>(),
+      r["rigify"]["max_dir_err_deg"].get<double>(), rec["frames"].get<int>(),
+      rec["duration_s"].get<double>(), rs["frames_checked"].get<int>(),
       rs["max_err_deg"].get<double>(), poses.size(), imp["seconds"].get<double>(), worst,
       imp["samples"].size());
+}
+
+TEST(BlenderLiveLink, TheStreamModuleKeepsFramesRefusesBadLinesAndKeepsTimesInOrder) {
+  ScratchDir dir;
+  const std::string out = dir.file("units.out");
+  const int rc = test::run_program(
+      {"/usr/bin/python3", std::string(MOCAP_SOURCE_DIR) + "/tests/blender/stream_units.py",
+       std::string(MOCAP_SOURCE_DIR) + "/blender/mocap_live/stream.py"},
+      out);
+  const std::string text = test::slurp_file(out) + test::slurp_file(out + ".err");
+  EXPECT_EQ(rc, 0) << text;
+  EXPECT_EQ(text, "ok\n");
 }
 
 TEST(BlenderLiveLink, TheStreamClientWaitsForMocapdThenReadsItsPrivateUnixSocket) {

@@ -279,7 +279,9 @@ TEST(MocapSetup, AssignsEverySensorByMotionAndMocapdRunsTheRig) {
     EXPECT_EQ(found, t.segment >= 0 ? 1 : 0) << (t.port + t.mac);
   }
   for (const auto& s : cfg->sensors)
-    if (s.segment == "pelvis") EXPECT_EQ(s.driver, "line");  // found by probing
+    if (s.segment == "pelvis") {
+      EXPECT_EQ(s.driver, "line");  // found by probing
+    }
   EXPECT_FALSE(cfg->filter.use_mag);  // SlimeVR trackers send orientations, no magnetometer
 
   // mocapd runs the rig: every sensor streams; moving a segment turns it in the pose stream.
