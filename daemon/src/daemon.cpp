@@ -169,6 +169,10 @@ void Daemon::shutdown() {
   control_.reset();
   for (auto& d : devices_)
     d->stop();
+  // Services (the demo's performer) feed the pipeline: stopped before it, as devices are (they
+  // were only stopped by their destructors, after the pipeline was gone: a crash on quit).
+  for (auto& s : parts_.services)
+    s->stop();
   pipeline_->stop();
   std::lock_guard lock(rec_mu_);
   if (!recording_path_.empty() && parts_.recorder) {

@@ -91,6 +91,34 @@ TEST(SessionExport, CsvHasOneRowPerSegmentPerFrameWithTheRecordedValues) {
   EXPECT_EQ(rows, 5 * kSegmentCount);
 }
 
+TEST(SessionExport, JsonLinesAreThePoseStreamsWithTheRecordedWallClock) {
+  TempDir dir;
+  const std::string ses = dir.file("j.mocap"), out = dir.file("j.jsonl"), err = dir.file("err");
+  record(ses, 6);
+  ASSERT_EQ(run(ses + " --json " + out, err), 0) << read_text(err);
+  const session::SessionHeader h = make_header();
+  std::istringstream in(read_text(out));
+  std::string line;
+  uint64_t frame = 0;
+  while (std::getline(in, line)) {
+    const auto j = nlohmann::json::parse(line);
+    const PoseFrame f = make_pose(frame);
+    EXPECT_EQ(j["v"], 1);
+    EXPECT_EQ(j["frame"].get<uint64_t>(), f.frame);
+    EXPECT_EQ(j["t_ns"].get<int64_t>(), f.t_ns);
+    // the wall clock of the recording: its header's offset (no clock blocks in this file)
+    EXPECT_EQ(j["t_unix_ns"].get<int64_t>(), f.t_ns + (h.t_start_unix_ns - h.t_start_host_ns));
+    ASSERT_EQ(j["segments"].size(), static_cast<std::size_t>(kSegmentCount));
+    for (int s = 0; s < kSegmentCount; ++s) {
+      EXPECT_EQ(j["segments"][s]["name"], std::string(kSegmentNames[s]));
+      for (int k = 0; k < 4; ++k)
+        EXPECT_NEAR(j["segments"][s]["q"][k].get<double>(), f.q_earth_segment[s][k], 1e-5);
+    }
+    ++frame;
+  }
+  EXPECT_EQ(frame, 6u);
+}
+
 TEST(SessionExport, TornTailIsReportedAndTheRestExported) {
   TempDir dir;
   const std::string ses = dir.file("t.mocap"), csv = dir.file("t.csv"), err = dir.file("err");
@@ -126,7 +154,7 @@ TEST(SessionExport, BadInputsGiveClearErrors) {
   EXPECT_EQ(run(dir.file("missing.mocap") + " --csv " + dir.file("o.csv"), err), 1);
   EXPECT_NE(read_text(err).find("missing.mocap"), std::string::npos);
   EXPECT_EQ(run(ses, err), 2);  // neither --csv nor --bvh
-  EXPECT_NE(read_text(err).find("give one output: --csv, --bvh, --gltf or --opensim"),
+  EXPECT_NE(read_text(err).find("give one output: --csv, --json, --bvh, --gltf or --opensim"),
             std::string::npos)
       << read_text(err);
 }

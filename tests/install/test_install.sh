@@ -21,7 +21,8 @@ if [[ -x "$build/bin/mocap-viewer" ]]; then
   [[ -x "$prefix/bin/mocap-viewer" ]] || fail "mocap-viewer was built but not installed"
 fi
 for f in share/mocap/witmotion.toml share/mocap/demo.toml share/mocap/body/default.toml \
-  share/mocap/body/joint_limits.toml lib/udev/rules.d/70-mocap.rules lib/systemd/user/mocapd.service; do
+  share/mocap/body/joint_limits.toml lib/udev/rules.d/70-mocap.rules lib/systemd/user/mocapd.service \
+  share/mocap/blender/mocap_live.zip; do
   [[ -f "$prefix/$f" ]] || fail "missing $prefix/$f"
 done
 

@@ -1,38 +1,37 @@
 // Test helper for the exporters proven against Blender (headless) as a real third-party reader:
-// runs one of the tests/skeleton/blender_*_dump.py scripts on our file and compares the bone
-// rotations and positions Blender reconstructs with ours.
+// runs one of the tests/skeleton/blender_*_dump.py scripts on our file (through the shared
+// runner, tests/common/blender_runner.hpp) and compares the bone rotations and positions Blender
+// reconstructs with ours.
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "../common/blender_runner.hpp"
 #include "mocap/skeleton/bvh.hpp"
 #include "skeleton_test_util.hpp"
 
 namespace mocap::test {
 
-inline bool have_blender() {
-  return std::system("command -v blender >/dev/null 2>&1") == 0;
-}
-
-/// Runs `blender -b ... --python tests/skeleton/<script> -- <args>` with its output in `log`,
-/// then reads the JSON the script wrote to `json_path` into *out.
+/// Runs tests/skeleton/<script> in headless Blender with the space-separated `args`, its output
+/// in `log`, then reads the JSON the script wrote to `json_path` into *out.
 inline ::testing::AssertionResult run_blender_dump(const std::string& script,
                                                    const std::string& args,
                                                    const std::string& json_path,
                                                    const std::string& log, nlohmann::json* out) {
   std::remove(json_path.c_str());
-  const std::string cmd = "blender -b --factory-startup --python-exit-code 1 --python " +
-                          std::string(MOCAP_SOURCE_DIR) + "/tests/skeleton/" + script + " -- " +
-                          args + " >" + log + " 2>&1";
-  if (std::system(cmd.c_str()) != 0)
+  std::vector<std::string> argv;
+  std::istringstream words(args);
+  for (std::string w; words >> w;)
+    argv.push_back(w);
+  if (run_blender(std::string(MOCAP_SOURCE_DIR) + "/tests/skeleton/" + script, argv, log) != 0)
     return ::testing::AssertionFailure() << "blender failed; see " << log;
   std::ifstream in(json_path);
   if (!in) return ::testing::AssertionFailure() << "no output from blender";

@@ -1,5 +1,6 @@
 // mocap export: converts the poses recorded in a session file (docs/session-format.md) to CSV
-// (t,segment,w,x,y,z,px,py,pz: one row per segment per frame), BVH (the skeleton's BvhWriter,
+// (t,segment,w,x,y,z,px,py,pz: one row per segment per frame), pose JSON lines (the stream's
+// schema, docs/streaming.md, with the recorded wall-clock time), BVH (the skeleton's BvhWriter,
 // body height from the recorded configuration), binary glTF (GltfWriter) or an OpenSense
 // orientations table (OpenSimWriter). Damaged ranges are skipped and reported (exit status 3),
 // a torn tail is reported; everything intact is exported.
@@ -12,10 +13,12 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "mocap/core/cli.hpp"
 #include "mocap/daemon/config.hpp"
+#include "mocap/daemon/json_stream.hpp"
 #include "mocap/session/session_reader.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
@@ -31,6 +34,8 @@ namespace {
 constexpr const char* kExportUsage =
     "Converts the poses recorded in SESSION. CSV columns: t (seconds since the recording\n"
     "started), segment, w, x, y, z (q_earth_segment), px, py, pz (p_earth_segment_m, metres).\n"
+    "JSON: one line per frame exactly as the pose stream sends it (docs/streaming.md), frames\n"
+    "and times as recorded, t_unix_ns the recorded wall-clock time (the Blender add-on's import).\n"
     "BVH: N-pose rest, centimetres, the recorded body. glTF: binary .glb, one node per segment\n"
     "named like the BVH bones, a skin, one animation (rotations, root translation), metres.\n"
     "OpenSim: an OpenSense orientations table (pelvis_imu, femur_r_imu, ...: w,x,y,z in\n"
@@ -159,7 +164,31 @@ bool write_csv_row(std::FILE* f, double t, int s, const PoseFrame& p) {
                       q[1], q[2], q[3], x[0], x[1], x[2]) > 0;
 }
 
-enum class Format { csv, bvh, gltf, opensim };
+enum class Format { csv, json, bvh, gltf, opensim };
+
+/// Writes every pose of the session as a pose-stream JSON line (format_pose_json) with its
+/// wall-clock time from the session's clock (header, then clock blocks). Throws on a write
+/// error.
+long write_json_lines(SessionReader& r, FinishedPoses& poses, const std::string& out) {
+  std::FILE* f = std::fopen(out.c_str(), "w");
+  if (!f) throw std::runtime_error("cannot create '" + out + "': " + std::strerror(errno));
+  std::vector<char> line(daemon::kPoseJsonMaxLine);
+  long frames = 0;
+  bool ok = true;
+  poses.run(r, [&](const PoseFrame& p) {
+    PoseFrame g = p;
+    // The offset in force when the reader reached this pose (bridging delays a pose by at
+    // most 0.5 s; the clock offset moves by microseconds over that).
+    g.t_unix_ns = p.t_ns + r.unix_offset_ns();
+    const std::size_t n = daemon::format_pose_json(g, line.data(), line.size());
+    ok = n > 0 && std::fwrite(line.data(), 1, n, f) == n && ok;
+    ++frames;
+  });
+  ok = !std::ferror(f) && ok;
+  if (std::fclose(f) != 0 || !ok)
+    throw std::runtime_error("writing '" + out + "' failed: " + std::strerror(errno));
+  return frames;
+}
 
 int export_poses(SessionReader& r, const std::string& in, const std::string& out, Format format,
                  double rate_hz) {
@@ -167,7 +196,8 @@ int export_poses(SessionReader& r, const std::string& in, const std::string& out
   const BodyModel body(cfg.body.model);
   // BVH, glTF and OpenSim have one fixed frame time: resample to the recorded pipeline rate
   // unless told otherwise.
-  if (format != Format::csv && rate_hz <= 0) rate_hz = cfg.pipeline.rate_hz;
+  const bool fixed_rate = format != Format::csv && format != Format::json;
+  if (fixed_rate && rate_hz <= 0) rate_hz = cfg.pipeline.rate_hz;
   FinishedPoses poses(body.dimensions(), rate_hz);
   long frames = 0;
   // Every finished frame into one of the motion writers, then close it.
@@ -179,7 +209,9 @@ int export_poses(SessionReader& r, const std::string& in, const std::string& out
     writer.close();
   };
   try {
-    if (format == Format::gltf) {
+    if (format == Format::json) {
+      frames = write_json_lines(r, poses, out);
+    } else if (format == Format::gltf) {
       GltfWriterOptions opt;
       opt.frame_time_s = 1.0 / rate_hz;
       GltfWriter writer(out, body, opt);
@@ -228,16 +260,18 @@ int export_poses(SessionReader& r, const std::string& in, const std::string& out
 
 void add_export(CLI::App& app, int& exit_code) {
   struct ExportOptions {
-    std::string input, csv, bvh, gltf, opensim;
+    std::string input, csv, json, bvh, gltf, opensim;
     double rate_hz = 0;
   };
   auto o = std::make_shared<ExportOptions>();
-  CLI::App* c =
-      cli::add_command(app, "export", "convert a recorded session to CSV, BVH, glTF or OpenSim");
+  CLI::App* c = cli::add_command(
+      app, "export", "convert a recorded session to CSV, pose JSON lines, BVH, glTF or OpenSim");
   c->footer(kExportUsage);
   c->add_option("SESSION", o->input, "the recorded session (.mocapses)")->required();
   CLI::Option* outs[] = {
       c->add_option("--csv", o->csv, "write the poses as CSV to this file (one output per run)"),
+      c->add_option("--json", o->json,
+                    "write the poses as pose-stream JSON lines to this file (one output per run)"),
       c->add_option("--bvh", o->bvh, "write the poses as BVH to this file (one output per run)"),
       c->add_option("--gltf", o->gltf,
                     "write the poses as binary glTF (.glb) to this file (one output per run)"),
@@ -249,16 +283,19 @@ void add_export(CLI::App& app, int& exit_code) {
     for (CLI::Option* b : outs)
       if (a != b) a->excludes(b);
   CLI::Option* rate =
-      c->add_option("--frame-rate", o->rate_hz,
-                    "resample to this frame rate, Hz (default: CSV as recorded, the others at the "
-                    "recorded pipeline rate)")
+      c->add_option(
+           "--frame-rate", o->rate_hz,
+           "resample to this frame rate, Hz (default: CSV and JSON as recorded, the others at "
+           "the recorded pipeline rate)")
           ->check(CLI::Range(1e-9, 10000.0))
           ->default_str("");
   // --rate means a sensor's sample rate elsewhere (perform, simulate, bench).
   cli::add_deprecated_alias(*c, "--rate", o->rate_hz, rate)->check(CLI::Range(1e-9, 10000.0));
   c->callback([o, &exit_code] {
-    if (o->csv.empty() && o->bvh.empty() && o->gltf.empty() && o->opensim.empty()) {
-      std::fprintf(stderr, "mocap export: give one output: --csv, --bvh, --gltf or --opensim\n");
+    if (o->csv.empty() && o->json.empty() && o->bvh.empty() && o->gltf.empty() &&
+        o->opensim.empty()) {
+      std::fprintf(stderr,
+                   "mocap export: give one output: --csv, --json, --bvh, --gltf or --opensim\n");
       exit_code = 2;
       return;
     }
@@ -270,6 +307,7 @@ void add_export(CLI::App& app, int& exit_code) {
       return;
     }
     const auto [out, format] = !o->csv.empty()       ? std::pair{o->csv, Format::csv}
+                               : !o->json.empty()    ? std::pair{o->json, Format::json}
                                : !o->gltf.empty()    ? std::pair{o->gltf, Format::gltf}
                                : !o->opensim.empty() ? std::pair{o->opensim, Format::opensim}
                                                      : std::pair{o->bvh, Format::bvh};

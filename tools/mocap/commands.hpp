@@ -17,5 +17,6 @@ void add_bench(CLI::App& app, int& exit_code);
 void add_evaluate(CLI::App& app, int& exit_code);
 void add_gyro_scale(CLI::App& app, int& exit_code);
 void add_score(CLI::App& app, int& exit_code);
+void add_setup(CLI::App& app, int& exit_code);
 
 }  // namespace mocap::cmd

@@ -10,7 +10,7 @@
 namespace mocap {
 
 SimulatedDevice::SimulatedDevice(SimOptions opt) : opt_(std::move(opt)) {
-  motion_ = make_motion(opt_.motion);
+  motion_ = opt_.motion_source ? opt_.motion_source : make_motion(opt_.motion);
   EncoderOptions eo;
   eo.rate_hz = opt_.rate_hz;
   eo.options = opt_.options;

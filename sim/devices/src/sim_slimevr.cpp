@@ -126,6 +126,9 @@ SimSlimeTracker::SimSlimeTracker(SimSlimeOptions opt) : opt_(std::move(opt)) {
     throw std::invalid_argument("rssi: dBm, -128..0");
   if (!std::isnan(opt_.temperature_c) && !(opt_.temperature_c > -60 && opt_.temperature_c < 150))
     throw std::invalid_argument("temperature: degrees C, -60..150");
+  if (!opt_.sensor_motions.empty() &&
+      opt_.sensor_motions.size() != static_cast<std::size_t>(opt_.sensors))
+    throw std::invalid_argument("sensor_motions: one motion per IMU");
   motion_ = make_motion(opt_.motion);
   info_acked_.assign(static_cast<std::size_t>(opt_.sensors), false);
   last_sent_.assign(static_cast<std::size_t>(opt_.sensors), std::nullopt);
@@ -256,7 +259,10 @@ void SimSlimeTracker::run() {
         send(out);
       }
       for (int k = 0; k < opt_.sensors; ++k) {
-        const ImuSample truth = motion_->at(t_device_ns + sensor_phase_ns(k));
+        const auto sk = static_cast<std::size_t>(k);
+        const ImuSample truth = sk < opt_.sensor_motions.size()
+                                    ? opt_.sensor_motions[sk]->at(t_device_ns)
+                                    : motion_->at(t_device_ns + sensor_phase_ns(k));
         const Eigen::Quaterniond q = truth.q_device_sensor.normalized();
         auto& last = last_sent_[static_cast<size_t>(k)];
         if (opt_.optimize_updates && last && q.angularDistance(*last) < 1e-4) continue;

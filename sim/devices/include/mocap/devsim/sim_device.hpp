@@ -30,6 +30,8 @@ struct SimOptions {
   std::string protocol;
   double rate_hz = 100;
   std::string motion = "static";
+  /// When set, the truth comes from this motion instead of `motion` (a test's live performer).
+  std::shared_ptr<const Motion> motion_source;
   std::map<std::string, std::string> options;  ///< passed to the encoder
   std::string pty_link;                        ///< pty mode: stable symlink to create ("" = none)
   std::string udp;       ///< UDP mode: HOST:PORT to send to (empty = pty mode)
@@ -57,7 +59,7 @@ class SimulatedDevice {
  private:
   void run();
   SimOptions opt_;
-  std::unique_ptr<Motion> motion_;
+  std::shared_ptr<const Motion> motion_;
   std::unique_ptr<ProtocolEncoder> enc_;
   mutable std::mutex mu_;  // guards the endpoints
   std::unique_ptr<PtyEndpoint> pty_;

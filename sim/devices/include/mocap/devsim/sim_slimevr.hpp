@@ -48,6 +48,9 @@ struct SimSlimeOptions {
   int sensors = 1;  ///< IMUs on the board (sensor ids 0..n-1; each its own phase of the motion)
   double rate_hz = 100;
   std::string motion = "rotate";  ///< as make_motion
+  /// When not empty: IMU k's truth is sensor_motions[k] (no phase offset; one per IMU), instead
+  /// of `motion` (a test's live performer, each IMU on its own body segment).
+  std::vector<std::shared_ptr<const Motion>> sensor_motions;
   /// The firmware's OPTIMIZE_UPDATES: a rotation is sent only when it changed (a resting
   /// tracker goes quiet but for its answers to the server).
   bool optimize_updates = false;
@@ -83,7 +86,7 @@ class SimSlimeTracker {
 
   SimSlimeOptions opt_;
   slimevr::Mac mac_{};
-  std::unique_ptr<Motion> motion_;
+  std::shared_ptr<const Motion> motion_;
   int fd_ = -1;
   std::thread thread_;
   std::atomic<bool> stop_{false}, connected_{false};
