@@ -3,24 +3,28 @@
 // board's rotation datagram instead, with the WitMotion path measured first as the baseline). A
 // spawned mocapd (real drivers, pipeline with publish_every_sample, JSON server) reads N ptys; one
 // writer thread writes the sensors round-robin, evenly spread over each sample period, stamping
-// monotonic time at each write; a client thread stamps each received line. In per-sample mode the
-// frame a sample triggers shows that sensor with age_ms 0.0, so the k-th such line of sensor i is
-// matched to the k-th write of sensor i (first such line received after the write). With
-// --realtime-priority N (default 20) mocapd runs its reader, pipeline and stream threads in
-// SCHED_FIFO, and so do the writer (standing in for sensor hardware) and the client; 0 measures
-// normal scheduling.
+// monotonic time at each write; a client thread stamps each received line. Each line is matched
+// to the write it came from by payload: every frame shows, per sensor, the newest sample's device
+// time and number (SensorStatus t_device_ns, seq), and the bench knows what it wrote (WitMotion:
+// the device time in its time packet, distinct per sample; SlimeVR: the datagram's packet
+// number). Write k of sensor i is matched to the first line received after it whose sensor i
+// shows that sample; a sample no line shows is unmatched. With --realtime-priority N (default
+// 20) mocapd runs its reader, pipeline and stream threads in SCHED_FIFO, and so do the writer
+// (standing in for sensor hardware) and the client; 0 measures normal scheduling.
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -36,34 +40,35 @@ namespace {
 
 struct Line {
   int64_t t_recv_ns;
-  int64_t t_frame_ns;  ///< the line's "t": the sample's host time (read time mapped from the device
-                       ///< clock, <= read)
-  uint32_t zero_age_mask;  ///< sensors shown with age_ms 0.0 (the sample that made the frame)
+  int64_t t_frame_ns;  ///< the line's "t": the frame's time (its newest sample's host time, the
+                       ///< read time mapped from the device clock, <= read)
+  uint32_t first_key;  ///< index of its sensors' keys in the client's key array
 };
 
 /// The line's "t" (seconds, host monotonic clock) in ns; -1 if absent.
-int64_t frame_time_ns(const char* b, const char* e) {
+int64_t frame_time_ns(std::string_view line) {
   static constexpr char kT[] = "\"t\":";
-  const std::string_view line(b, static_cast<size_t>(e - b));
   const size_t pos = line.find(kT);
   if (pos == std::string_view::npos) return -1;
-  return static_cast<int64_t>(std::llround(std::strtod(b + pos + sizeof kT - 1, nullptr) * 1e9));
+  return static_cast<int64_t>(
+      std::llround(std::strtod(line.data() + pos + sizeof kT - 1, nullptr) * 1e9));
 }
 
-/// Bit i set if sensor i's age_ms is printed as 0.0.
-uint32_t zero_ages(const char* b, const char* e) {
-  static constexpr char kSensors[] = "\"sensors\":[";
-  static constexpr char kAge[] = "\"age_ms\":";
-  const std::string_view line(b, static_cast<size_t>(e - b));
+/// Appends each sensor's `field` (an integer: "seq" or "t_device_ns") to keys, in sensor order,
+/// exactly `sensors` of them (a missing one as 0, which no written sample has).
+void sensor_keys(std::string_view line, std::string_view field, int sensors,
+                 std::vector<uint64_t>& keys) {
+  static constexpr std::string_view kSensors = "\"sensors\":[";
   size_t pos = line.find(kSensors);
-  uint32_t mask = 0;
-  for (int i = 0; pos != std::string_view::npos && i < 32; ++i) {
-    pos = line.find(kAge, pos);
-    if (pos == std::string_view::npos) break;
-    pos += sizeof kAge - 1;
-    if (line.compare(pos, 4, "0.0,") == 0 || line.compare(pos, 4, "0.0}") == 0) mask |= 1u << i;
+  for (int i = 0; i < sensors; ++i) {
+    uint64_t v = 0;
+    if (pos != std::string_view::npos) pos = line.find(field, pos);
+    if (pos != std::string_view::npos) {
+      pos += field.size();
+      std::from_chars(line.data() + pos, line.data() + line.size(), v);
+    }
+    keys.push_back(v);
   }
-  return mask;
 }
 
 double percentile(std::vector<double> v, double p) {
@@ -99,9 +104,14 @@ bool measure(const RigOptions& ro, double seconds, Measured& m, std::string& err
       err = "cannot connect to the JSON stream";
       return false;
     }
-    // Client: stamps each line as its last byte arrives.
+    // Client: stamps each line as its last byte arrives and keeps what it shows of each sensor.
+    const bool slime = ro.protocol == "slimevr";
+    const std::string_view key_field = slime ? "\"seq\":" : "\"t_device_ns\":";
     std::vector<Line> lines;
-    lines.reserve(static_cast<size_t>(sensors * rate * (seconds + 2) * 1.5 + 1000));
+    std::vector<uint64_t> keys;  // per line, `sensors` keys from lines[j].first_key
+    const size_t expect_lines = static_cast<size_t>(sensors * rate * (seconds + 2) * 1.5 + 1000);
+    lines.reserve(expect_lines);
+    keys.reserve(expect_lines * static_cast<size_t>(sensors));
     std::atomic<bool> stop{false};
     std::thread client([&] {
       (void)set_this_thread_realtime(ro.realtime_priority, nullptr);
@@ -115,8 +125,9 @@ bool measure(const RigOptions& ro, double seconds, Measured& m, std::string& err
         size_t start = 0;
         for (size_t i = have - static_cast<size_t>(n); i < have; ++i) {
           if (buf[i] != '\n') continue;
-          lines.push_back({now, frame_time_ns(buf.data() + start, buf.data() + i),
-                           zero_ages(buf.data() + start, buf.data() + i)});
+          const std::string_view line(buf.data() + start, i - start);
+          lines.push_back({now, frame_time_ns(line), static_cast<uint32_t>(keys.size())});
+          sensor_keys(line, key_field, sensors, keys);
           start = i + 1;
         }
         std::memmove(buf.data(), buf.data() + start, have - start);
@@ -124,11 +135,17 @@ bool measure(const RigOptions& ro, double seconds, Measured& m, std::string& err
         if (have == buf.size()) have = 0;  // a line longer than 1 MB: drop it
       }
     });
-    // Writer: sensor i at t0 + k/rate + i/(rate*N).
+    // Writer: sensor i at t0 + k/rate + i/(rate*N), device time continuing 1 s after the
+    // warm-up's (so no measured sample shows a warm-up sample's device time).
     const int64_t period_ns = static_cast<int64_t>(1e9 / rate);
     const int64_t spacing_ns = period_ns / sensors;
     const int64_t periods = static_cast<int64_t>(seconds * rate);
-    std::vector<std::vector<int64_t>> writes(static_cast<size_t>(sensors));
+    const int64_t t_device0 = rig.last_device_ns() + 1'000'000'000;
+    struct Write {
+      int64_t t_ns;
+      uint64_t key;
+    };
+    std::vector<std::vector<Write>> writes(static_cast<size_t>(sensors));
     for (auto& w : writes)
       w.reserve(static_cast<size_t>(periods));
     uint64_t short_writes = 0;
@@ -140,8 +157,9 @@ bool measure(const RigOptions& ro, double seconds, Measured& m, std::string& err
                     static_cast<long>(due % 1'000'000'000)};
         ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
         const int64_t w = monotonic_ns();
-        if (!rig.write_sample(i, 1'000'000'000 + k * period_ns)) ++short_writes;
-        writes[static_cast<size_t>(i)].push_back(w);
+        uint64_t key = 0;
+        if (!rig.write_sample(i, t_device0 + k * period_ns, &key)) ++short_writes;
+        writes[static_cast<size_t>(i)].push_back({w, key});
       }
       if (k % 64 == 0) rig.answer_host();
     }
@@ -152,29 +170,32 @@ bool measure(const RigOptions& ro, double seconds, Measured& m, std::string& err
     client.join();
     ::close(fd);
     rig.stop();
-    // Match: per sensor, the k-th write -> the first later line showing that sensor at age 0.
+    // Match: per sensor, write k -> the first line received after it that shows its key (what
+    // the bench wrote into that sample). A sensor's keys only grow from line to line, so one
+    // forward scan per sensor finds them; a key skipped over was shown by no line.
     std::vector<double> lat_ms;
     lat_ms.reserve(static_cast<size_t>(sensors * periods));
-    std::vector<double> to_read_ms, from_read_ms;  // split at the sample's host time
+    std::vector<double> to_read_ms, from_read_ms;  // split at the frame's time
     to_read_ms.reserve(lat_ms.capacity());
     from_read_ms.reserve(lat_ms.capacity());
     uint64_t unmatched = 0;
     for (int i = 0; i < sensors; ++i) {
       size_t li = 0;
-      for (const int64_t w : writes[static_cast<size_t>(i)]) {
-        while (li < lines.size() &&
-               (lines[li].t_recv_ns < w || !(lines[li].zero_age_mask & (1u << i))))
+      const auto key_of = [&](size_t l) {
+        return keys[lines[l].first_key + static_cast<size_t>(i)];
+      };
+      for (const Write& w : writes[static_cast<size_t>(i)]) {
+        while (li < lines.size() && (lines[li].t_recv_ns < w.t_ns || key_of(li) < w.key))
           ++li;
-        if (li == lines.size()) {
+        if (li == lines.size() || key_of(li) != w.key) {
           ++unmatched;
           continue;
         }
-        lat_ms.push_back((lines[li].t_recv_ns - w) * 1e-6);
+        lat_ms.push_back((lines[li].t_recv_ns - w.t_ns) * 1e-6);
         if (lines[li].t_frame_ns >= 0) {
-          to_read_ms.push_back((lines[li].t_frame_ns - w) * 1e-6);
+          to_read_ms.push_back((lines[li].t_frame_ns - w.t_ns) * 1e-6);
           from_read_ms.push_back((lines[li].t_recv_ns - lines[li].t_frame_ns) * 1e-6);
         }
-        ++li;
       }
     }
     m.written = static_cast<uint64_t>(sensors) * static_cast<uint64_t>(periods);
@@ -250,6 +271,11 @@ int run_latency(const LatencyOptions& o) {
   if (rt_priority > 0 && !rt_granted)
     std::fprintf(stderr, "mocap bench latency: %s; measuring normal scheduling\n",
                  rt_error.c_str());
+  if (!slime && rate > 1000) {
+    // WitMotion time packets carry whole milliseconds: faster samples share a device time.
+    std::fprintf(stderr, "mocap bench latency: --rate above 1000 Hz needs --protocol slimevr\n");
+    return 2;
+  }
   const double load_before = load_average_1m();
   RigOptions ro;
   ro.sensors = sensors;

@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -152,11 +153,13 @@ int DaemonRig::stop() {
   return exit_status_;
 }
 
-bool DaemonRig::write_sample(int i, int64_t t_device_ns) {
+bool DaemonRig::write_sample(int i, int64_t t_device_ns, uint64_t* key) {
+  last_device_ns_ = std::max(last_device_ns_, t_device_ns);
   if (!boards_.empty()) {
     SlimeBoard& b = boards_[static_cast<size_t>(i)];
     const double ph = t_device_ns * 1e-9;
     bytes_.clear();
+    if (key) *key = b.number + 1;
     slime_sim::rotation(
         ++b.number, 0,
         Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * std::sin(ph), Eigen::Vector3d::UnitZ())),
@@ -175,11 +178,13 @@ bool DaemonRig::write_sample(int i, int64_t t_device_ns) {
   s.valid = kFieldGyr | kFieldAcc | kFieldMag | kFieldQuat;
   bytes_.clear();
   enc_[i]->encode(s, bytes_);
+  if (key) *key = static_cast<uint64_t>(t_device_ns / 1'000'000 * 1'000'000);
   return ptys_[i]->write(bytes_);
 }
 
-void DaemonRig::answer_host() {
+size_t DaemonRig::answer_host() {
   uint8_t buf[256];
+  size_t host_bytes = 0;
   for (size_t i = 0; i < boards_.size(); ++i) {
     SlimeBoard& b = boards_[i];
     ssize_t n;
@@ -196,10 +201,12 @@ void DaemonRig::answer_host() {
   for (size_t i = 0; i < ptys_.size(); ++i) {
     const size_t n = ptys_[i]->read(std::span<uint8_t>(buf, sizeof buf), 0);
     if (n == 0) continue;
+    host_bytes += n;
     reply_.clear();
     enc_[i]->handle_host_bytes(std::span<const uint8_t>(buf, n), reply_);
     if (!reply_.empty()) ptys_[i]->write(reply_);
   }
+  return host_bytes;
 }
 
 std::string DaemonRig::status() const {
@@ -224,14 +231,17 @@ std::string DaemonRig::status() const {
 
 bool DaemonRig::wait_streaming(double timeout_s) {
   const int64_t end = monotonic_ns() + static_cast<int64_t>(timeout_s * 1e9);
-  int64_t t_dev = 0;
+  int64_t t_dev = 0, last_host_ns = monotonic_ns();
   while (monotonic_ns() < end) {
-    // Keep the sensors talking while the daemon opens them.
+    // Keep the sensors talking while the daemon opens and configures them.
     for (int i = 0; i < opt_.sensors; ++i)
       write_sample(i, t_dev);
     t_dev += 10'000'000;
-    answer_host();
-    const std::string st = status();
+    if (answer_host() > 0) last_host_ns = monotonic_ns();
+    const bool set_up = boards_.empty() ? monotonic_ns() - last_host_ns >= 300'000'000
+                                        : std::all_of(boards_.begin(), boards_.end(),
+                                                      [](const auto& b) { return b.answered; });
+    const std::string st = set_up ? status() : std::string();
     if (!st.empty()) {
       size_t streaming = 0, pos = 0;
       while ((pos = st.find("\"streaming\"", pos)) != std::string::npos) {

@@ -31,16 +31,23 @@ class DaemonRig {
   explicit DaemonRig(const RigOptions& o);  ///< spawns mocapd; throws std::runtime_error
   ~DaemonRig();                             ///< stops mocapd (SIGTERM, then waits)
   /// Encodes one sample of sensor i (device time t_device_ns) and writes it to its pty (or
-  /// sends its board's rotation datagram).
-  bool write_sample(int i, int64_t t_device_ns);
+  /// sends its board's rotation datagram). key (if given) receives what the daemon's frames
+  /// will show of this sample (SensorStatus): WitMotion its device time as the device sends it
+  /// (whole ms, in ns: frames' t_device_ns), SlimeVR its packet number (frames' seq).
+  bool write_sample(int i, int64_t t_device_ns, uint64_t* key = nullptr);
+  /// The latest device time written to any sensor (warm-up included), ns.
+  int64_t last_device_ns() const { return last_device_ns_; }
   /// Answers host commands on every pty (the driver configures its device at open); SlimeVR:
   /// reads the server's datagrams and repeats the handshake of boards not yet answered.
-  void answer_host();
+  /// Returns how many host bytes the ptys carried (0 for SlimeVR).
+  size_t answer_host();
   int json_port() const { return port_; }
   pid_t pid() const { return pid_; }
   /// `status` over the control socket (one JSON line), "" on failure.
   std::string status() const;
-  /// Waits until every sensor is streaming (status), up to timeout_s.
+  /// Waits until every sensor is streaming (status) and its device is set up (WitMotion: no
+  /// host command for 300 ms, so the output content the driver asked for is in force; SlimeVR:
+  /// every board's handshake answered), up to timeout_s.
   bool wait_streaming(double timeout_s);
   /// Stops mocapd (SIGTERM) and returns its exit status; idempotent.
   int stop();
@@ -59,6 +66,7 @@ class DaemonRig {
   std::vector<uint8_t> bytes_, reply_;
   std::string dir_, ctl_, log_;
   int port_ = 0;
+  int64_t last_device_ns_ = 0;
   pid_t pid_ = -1;
   int exit_status_ = -1;
 };

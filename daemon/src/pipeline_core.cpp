@@ -56,6 +56,9 @@ void PipelineCore::process(const ImuSample& s) {
   }
   if (s.flags & kFlagGapBefore) ++h.gaps;
   h.last_t_ns = std::max(h.last_t_ns, s.t_host_ns);
+  h.seq = s.seq;
+  h.t_device_ns = s.t_device_ns;
+  sample_since_frame_ = true;
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
   if (!h.live) {
     h.live = true;
@@ -114,17 +117,26 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
   maybe_finish_calibration(t_now_ns);
   const int64_t stale_ns = static_cast<int64_t>(cfg_.stale_after_ms * 1e6);
   // Every frame has a time of its own: the newest sample's (a frame carries the pose of that
-  // time; docs/accuracy.md shows holding it beats predicting). No sample since the last frame:
-  // no new pose, no frame, unless a frame flag or the calibration state changed or the sensors
-  // fell silent for stale_after_ms: then a frame at the clock's time says so.
+  // time; docs/accuracy.md shows holding it beats predicting). A sample older than the last
+  // frame (sensors' clocks map their samples to slightly different delays; the merge is by
+  // time only within one drain) still changes the pose: its frame is 1 ns after the last, so
+  // it is never held back until a newer sample comes (per-sample mode would otherwise skip its
+  // frame). No sample since the last frame: no new pose, no frame, unless a frame flag or the
+  // calibration state changed or the sensors fell silent for stale_after_ms: then a frame at
+  // the clock's time says so.
   int64_t t_frame_ns = newest_t_ns_;
   if (published_t_ns_ != INT64_MIN && t_frame_ns <= published_t_ns_) {
-    if (t_now_ns <= published_t_ns_ || (!state_changed_ && t_now_ns - published_t_ns_ < stale_ns))
-      return;
-    t_frame_ns = t_now_ns;
+    if (sample_since_frame_) {
+      t_frame_ns = published_t_ns_ + 1;
+    } else {
+      if (t_now_ns <= published_t_ns_ || (!state_changed_ && t_now_ns - published_t_ns_ < stale_ns))
+        return;
+      t_frame_ns = t_now_ns;
+    }
   }
   published_t_ns_ = t_frame_ns;
   state_changed_ = false;
+  sample_since_frame_ = false;
   // Sensors that went silent degrade their segment (the engine infers it from the parent).
   for (size_t i = 0; i < sensors_.size(); ++i) {
     Health& h = health_[i];
@@ -172,6 +184,8 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
     st.flags = static_cast<uint16_t>(fs.segment_flags() | (h.live ? 0u : uint32_t{kSegStale}));
     st.gyro_bias_dps = static_cast<float>(fs.gyro_bias_rad_s * kDegPerRad);
     st.heading_sigma_deg = static_cast<float>(fs.heading_sigma_rad * kDegPerRad);
+    st.seq = h.seq;
+    st.t_device_ns = h.t_device_ns;
     if (sensors_[i].segment >= 0 && !h.live) frame_.segment_flags[sensors_[i].segment] |= kSegStale;
   }
   for (FrameSink* s : sinks_)

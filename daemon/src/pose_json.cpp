@@ -192,6 +192,10 @@ std::size_t format_pose_json(const PoseFrame& f, char* out, std::size_t capacity
     o.integer(st.errors);
     o.put(",\"flags\":");
     o.integer(static_cast<int>(st.flags));
+    o.put(",\"seq\":");
+    o.integer(st.seq);
+    o.put(",\"t_device_ns\":");
+    o.integer(st.t_device_ns);
     o.put('}');
   }
   o.put("]}\n");

@@ -34,6 +34,9 @@ class DecoderCommon {
             SampleSink& sink);
   /// Emits with host read time as the sample time (devices without a clock).
   void emit_untimed(ImuSample& s, int64_t t_read_ns, SampleSink& sink);
+  /// The next sample's ImuSample::seq is the device's own counter `seq` (e.g. a packet number);
+  /// without this call samples are counted (gaps included).
+  void set_next_seq(uint32_t seq) { seq_ = seq; }
 
   DecoderStats stats;
   uint16_t sensor_id = 0;

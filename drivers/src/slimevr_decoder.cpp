@@ -177,7 +177,7 @@ void SlimeVrDecoder::feed(std::span<const uint8_t> record, int64_t t_host_ns, Sa
     std::copy_n(record.begin(), b.hello_len, b.hello_record.begin());
   }
   for (Sensor& s : sensors_) {
-    if (s.board == bi && s.new_quat) emit(s, t_host_ns, sink);
+    if (s.board == bi && s.new_quat) emit(s, t_host_ns, sink, 0, number);
     if (s.telemetry_changed) {
       s.telemetry_changed = false;
       sink.on_telemetry(s.map.sensor_id, s.telemetry);
@@ -288,7 +288,8 @@ void SlimeVrDecoder::handle(int bi, const sv::Packet& p, int64_t t_ns, SampleSin
   (void)t_ns;
 }
 
-void SlimeVrDecoder::emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t flags) {
+void SlimeVrDecoder::emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t flags,
+                          uint64_t number) {
   s.new_quat = false;
   const double norm = s.q.norm();
   if (!std::isfinite(norm) || norm < 0.5 || norm > 1.5) {
@@ -313,6 +314,9 @@ void SlimeVrDecoder::emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t fla
                        "tracker " + sv::mac_string(s.map.mac) + " sensor " +
                            std::to_string(s.map.tracker_sensor) + " streaming");
   }
+  // The sample's number is the board's packet number (a hold repeats its rotation's).
+  if (number != 0) s.number = static_cast<uint32_t>(number);
+  if (s.number != 0) s.common.set_next_seq(s.number);
   const uint64_t before = s.common.stats.samples;
   s.common.emit_untimed(out, t_ns, sink);
   stats_.samples += s.common.stats.samples - before;

@@ -108,6 +108,7 @@ class SlimeVrDecoder final : public ProtocolDecoder {
     int board = -1;  ///< index in boards_ while connected
     bool new_quat = false, has_acc = false, connected = false;
     int64_t last_emit_ns = 0;
+    uint32_t number = 0;  ///< packet number of the datagram with its newest rotation (0: none)
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
     Eigen::Vector3d lin_acc_m_s2 = Eigen::Vector3d::Zero();
     SensorTelemetry telemetry;  ///< what its board said of itself and of this sensor
@@ -117,7 +118,8 @@ class SlimeVrDecoder final : public ProtocolDecoder {
   int board_for(uint32_t ip, uint16_t port, int64_t t_ns);
   void handle(int b, const slimevr::Packet& p, int64_t t_ns, SampleSink& sink);
   void queue(const Board& b, std::span<const uint8_t> bytes);
-  void emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t flags = 0);
+  /// number: the carrying datagram's packet number (0: none, or a hold of the last rotation).
+  void emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t flags = 0, uint64_t number = 0);
   /// Applies f to the telemetry of the rig sensors on board bi (all of them, or only those with
   /// tracker sensor id `only` when it is 0..254), noting which changed.
   template <class F>

@@ -67,6 +67,7 @@ void AttitudeFilter::refresh_coeffs() {
   c_.mag_latency.k = gain_from_tau(p_.mag_latency.tau_s, c_.ts.mag_s);
   c_.upset_acc_lp = butterworth(p_.upset.tau_s, c_.ts.acc_s);
   c_.upset_mag_lp = butterworth(p_.upset.tau_s, c_.ts.mag_s);
+  c_.upset_gyr_rad_s = p_.upset.gyr_deg_s * kRadPerDeg;
   c_.mag_latency.k_hp = gain_from_tau(p_.mag_latency.hp_tau_s, c_.ts.mag_s);
 
   // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
@@ -135,24 +136,24 @@ bool AttitudeFilter::stream_dt(int64_t t_ns, StreamTiming& timing, double& dt_s)
       long_run = 0;
     }
   }
-  // Re-derive coefficients when a tracked period moved more than 2 % from the one in use.
-  auto moved = [](double nom, double used) {
-    return nom > 0 && std::abs(nom - used) > 0.02 * used;
-  };
-  if (moved(st_.gyr_timing.ts_nom_s, c_.ts.gyr_s) || moved(st_.acc_timing.ts_nom_s, c_.ts.acc_s) ||
-      moved(st_.mag_timing.ts_nom_s, c_.ts.mag_s))
-    refresh_coeffs();
+  // Re-derive coefficients when this stream's tracked period moved more than 2 % from the one
+  // in use. Only this stream's can have moved: every other stream's was checked (and the
+  // coefficients refreshed) when it last changed, and coefficients change only here.
+  const double used = &timing == &st_.gyr_timing   ? c_.ts.gyr_s
+                      : &timing == &st_.acc_timing ? c_.ts.acc_s
+                                                   : c_.ts.mag_s;
+  if (ts_nom > 0 && std::abs(ts_nom - used) > 0.02 * used) refresh_coeffs();
   return true;
 }
 
-void AttitudeFilter::update(const ImuSample& s) {
+[[gnu::flatten]] void AttitudeFilter::update(const ImuSample& s) {
   double dt_s = 0;
   if (s.has(kFieldGyr)) {
     if (check_vector(s.gyr_rad_s, 0.0, p_.input.max_gyr_rad_s, cnt_) &&
         stream_dt(s.t_host_ns, st_.gyr_timing, dt_s)) {
       ++cnt_.gyr_ok;
-      if (p_.upset.enabled && ((s.flags & kFlagGyrClipped) || s.gyr_rad_s.cwiseAbs().maxCoeff() >=
-                                                                  p_.upset.gyr_deg_s * kRadPerDeg))
+      if (p_.upset.enabled &&
+          ((s.flags & kFlagGyrClipped) || s.gyr_rad_s.cwiseAbs().maxCoeff() >= c_.upset_gyr_rad_s))
         note_clipped_gyr();
       update_gyr(s.gyr_rad_s, dt_s);
     }
@@ -214,7 +215,7 @@ void AttitudeFilter::update_rest_gyr(const Eigen::Vector3d& gyr) {
 void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
   (void)dt_s;
   update_rest_acc(acc);
-  check_upset(acc);
+  if (st_.upset.checking) check_upset(acc);  // nothing to do while nothing was clipped
   if (!update_inclination(acc)) return;
   st_.bias.corr_sum += st_.inclination.last_acc_earth.head<2>();
   st_.gyr_gain.gyr_sum_rad_s += st_.strapdown.last_gyr_rad_s;
@@ -300,7 +301,7 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
     const auto& bl = st_.bias.motion_bias_lp.step(rb, c_.bias.lp, p_.inclination.tau_acc_s, ts);
     rb_lp = Eigen::Vector2d(bl[0], bl[1]);
   }
-  Eigen::Vector3d e, w;
+  Eigen::Vector3d e = Eigen::Vector3d::Zero(), w;
   Eigen::Matrix3d cm;
   const Eigen::Vector3d& b = st_.bias.rad_s;
   if (st_.rest.at_rest && p_.bias.rest_est) {

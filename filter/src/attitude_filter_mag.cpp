@@ -47,11 +47,12 @@ double AttitudeFilter::mag_latency_s() const {
 
 // A field sample: hard iron, into the 6D frame (latency-compensated), disturbance tests,
 // heading.
-void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
+[[gnu::flatten]] void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const Eigen::Quaterniond q6 = st_.inclination.q_acc * st_.strapdown.q_gyr;
   if (p_.hard_iron.tau_s > 0) update_hard_iron(mag_raw, q6, dt_s);
-  const Eigen::Vector3d m_e = mag_to_earth(mag_raw - st_.hard_iron.applied_uT, q6);
-  upset_mag(mag_raw - st_.hard_iron.applied_uT);
+  const Eigen::Vector3d mag = mag_raw - st_.hard_iron.applied_uT;
+  const Eigen::Vector3d m_e = mag_to_earth(mag, q6);
+  if (st_.upset.checking) upset_mag(mag);  // nothing to do while nothing was clipped
   if (p_.mag_dist.rejection) update_mag_disturbance(m_e);
   update_heading(m_e, dt_s);
 }

@@ -47,13 +47,15 @@ std::vector<SensorInfo> two_sensors() {
 /// A PipelineCore over two_sensors() (pelvis, head) at rate_hz, sensors stale after 100 ms,
 /// publishing into `sink`.
 struct TwoSensorCore {
-  explicit TwoSensorCore(double rate_hz) : core(config(rate_hz), {}, two_sensors(), eng) {
+  explicit TwoSensorCore(double rate_hz, bool per_sample = false)
+      : core(config(rate_hz, per_sample), {}, two_sensors(), eng) {
     core.add_sink(&sink);
   }
-  static PipelineConfig config(double rate_hz) {
+  static PipelineConfig config(double rate_hz, bool per_sample) {
     PipelineConfig pc;
     pc.rate_hz = rate_hz;
     pc.stale_after_ms = 100;
+    pc.publish_every_sample = per_sample;
     return pc;
   }
   test::GyroEngine eng = [] {
@@ -125,6 +127,37 @@ TEST(PipelineCore, EveryFrameHasItsOwnTime) {
   ASSERT_EQ(sink.frames.size(), before_flag + 1);
   EXPECT_TRUE(sink.frames.back().flags & kFrameDemo);
   EXPECT_GT(sink.frames.back().t_ns, sink.frames[before_flag - 1].t_ns);
+}
+
+// Per-sample mode: the frame published after a sample shows that sample (its number, device
+// time and turn of its segment), also when the sample is older than the last frame (each
+// sensor's clock maps its samples with a delay of its own, so one can come "late"): such a
+// sample once got no frame and waited for a newer sample of any sensor.
+TEST(PipelineCore, PerSampleFrameShowsTheSample) {
+  TwoSensorCore pipe(120, true);
+  auto& [eng, core, sink] = pipe;
+  for (uint32_t k = 0; k < 100; ++k) {
+    for (uint16_t i = 0; i < 2; ++i) {
+      // Sensor 1's sample is 100 us older than sensor 0's, which was processed first.
+      ImuSample s = sample(i, 1'000'000'000 + k * 5'000'000LL + (i == 0 ? 200'000 : 100'000),
+                           i == 1 ? 2.0 : 0.0);
+      s.seq = 7 + k;
+      s.t_device_ns = 3'000'000'000 + k * 5'000'000LL + i;
+      const size_t before = sink.frames.size();
+      core.process(s);
+      ASSERT_EQ(sink.frames.size(), before + 1) << "sample " << k << " of sensor " << i;
+      const PoseFrame& f = sink.frames.back();
+      EXPECT_EQ(f.sensors[i].seq, s.seq);
+      EXPECT_EQ(f.sensors[i].t_device_ns, s.t_device_ns);
+      const int seg = eng.segment[i];
+      EXPECT_FLOAT_EQ(f.q_earth_segment[seg][0], static_cast<float>(eng.q[i].w()));
+      EXPECT_FLOAT_EQ(f.q_earth_segment[seg][3], static_cast<float>(eng.q[i].z()));
+      if (before > 0) EXPECT_GT(f.t_ns, sink.frames[before - 1].t_ns);
+    }
+  }
+  // Sensor 1 turned at 2 rad/s for 99 periods of 5 ms, and the last frame shows it all.
+  const auto& q = sink.frames.back().q_earth_segment[3];
+  EXPECT_NEAR(2 * std::atan2(q[3], q[0]), 2.0 * 99 * 0.005, 1e-4);
 }
 
 TEST(PipelineCore, RejectsNanAndUnknownSensors) {

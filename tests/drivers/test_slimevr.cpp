@@ -153,6 +153,10 @@ TEST(SlimeVrDecoder, MapsMacAndSensorIdToTheRigSensorAndCarriesTheOrientation) {
       Eigen::Vector3d(1, 0, 0) + q.conjugate() * Eigen::Vector3d(0, 0, 9.80665);
   EXPECT_LT((s[1].acc_m_s2 - f).norm(), 1e-5);
   EXPECT_EQ(dec->stats().dropped_samples, 1u);
+  // Each sample's number is its datagram's packet number (frames show it: a client can tell
+  // which datagram a frame answers).
+  EXPECT_EQ(s[0].seq, 3u);
+  EXPECT_EQ(s[1].seq, 5u);
 }
 
 TEST(SlimeVrDecoder, ASensorWithoutAMacIsRefusedWithAClearError) {

@@ -100,6 +100,8 @@ class PipelineCore {
     uint32_t gaps = 0;               // samples flagged kFlagGapBefore
     int8_t link = -1;                // what its device reported: -1 nothing, 0 gone, 1 connected
     bool live = false;
+    uint32_t seq = 0;         // the newest sample's ImuSample::seq
+    int64_t t_device_ns = 0;  // and its device time
   };
   void maybe_finish_calibration(int64_t t_now_ns);
 
@@ -120,6 +122,7 @@ class PipelineCore {
   uint32_t extra_flags_ = 0;
   bool calibrating_ = false;
   bool state_changed_ = false;  ///< a flag or the calibration state changed since the last frame
+  bool sample_since_frame_ = false;  ///< a sample was taken since the last frame
   CalibrationPose calib_pose_ = CalibrationPose::npose;
   int64_t calib_at_ns_ = 0;
 };

@@ -94,18 +94,21 @@ class AttitudeFilter {
   bool update_inclination(const Eigen::Vector3d& acc);
   // Upset recovery (attitude_filter_upset.cpp).
   /// A gyro sample at full scale: the strapdown may have lost rotation; the check begins.
-  void note_clipped_gyr();
+  [[gnu::noinline]] void note_clipped_gyr();
   /// The field (hard iron removed) into the check's fast low-pass.
-  void upset_mag(const Eigen::Vector3d& mag);
+  [[gnu::noinline]] void upset_mag(const Eigen::Vector3d& mag);
   /// The check, with each acc sample: a fresh orientation from fast-low-passed acc (and field)
   /// against the filter's; a steady disagreement is corrected.
-  void check_upset(const Eigen::Vector3d& acc);
-  void recover_upset(const Eigen::Quaterniond& q_acc, double delta_rad, bool with_heading);
+  [[gnu::noinline]] void check_upset(const Eigen::Vector3d& acc);
+  [[gnu::noinline]] void recover_upset(const Eigen::Quaterniond& q_acc, double delta_rad,
+                                       bool with_heading);
   void update_bias(const Eigen::Vector3d& acc_earth_unfiltered_corr, double dt_s);
   void update_gain_regressor(const Eigen::Matrix3d& r6, const Eigen::Vector3d& w, double ts);
-  void update_gain(const Eigen::Vector2d& residual, const Eigen::Matrix<double, 2, 9>& reg,
-                   const Eigen::Matrix3d& r_lp);
-  void update_hard_iron(const Eigen::Vector3d& mag_raw, const Eigen::Quaterniond& q6, double dt_s);
+  [[gnu::noinline]] void update_gain(const Eigen::Vector2d& residual,
+                                     const Eigen::Matrix<double, 2, 9>& reg,
+                                     const Eigen::Matrix3d& r_lp);
+  [[gnu::noinline]] void update_hard_iron(const Eigen::Vector3d& mag_raw,
+                                          const Eigen::Quaterniond& q6, double dt_s);
   void select_hard_iron(const Eigen::Vector3d& m_raw_e, const Eigen::Vector3d& m_corr_e);
   /// The (hard-iron corrected) field in the 6D earth frame, compensated for the magnetometer's
   /// latency behind the gyro (and the latency estimate updated).
@@ -116,7 +119,7 @@ class AttitudeFilter {
   double heading_measurement_var() const;
   /// The heading gain after the rejection and start-up rules (k: the Kalman gain).
   double heading_gain(double k);
-  void end_mag_startup();
+  [[gnu::noinline]] void end_mag_startup();
   /// Squared deviation of a field (norm, dip) from a reference, in units of the disturbance
   /// thresholds (mag_dist.norm_th, mag_dist.dip_th_deg).
   double field_deviation2(double norm, double dip, double ref_norm, double ref_dip) const;

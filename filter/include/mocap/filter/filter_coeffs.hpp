@@ -63,6 +63,7 @@ struct FilterCoeffs {
   HardIronStageCoeffs hard_iron;
   MagLatencyCoeffs mag_latency;
   LowpassCoeffs upset_acc_lp, upset_mag_lp;  ///< upset recovery's fast low-passes
+  double upset_gyr_rad_s = 0;                ///< upset.gyr_deg_s in rad/s
 };
 
 }  // namespace mocap

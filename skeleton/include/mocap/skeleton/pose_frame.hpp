@@ -51,7 +51,11 @@ struct SensorStatus {
   uint32_t errors = 0;          ///< checksum failures and resyncs
   float gyro_bias_dps = 0;      ///< norm of the filter's bias estimate, deg/s
   float heading_sigma_deg = 0;  ///< filter's heading uncertainty
-  float reserved = 0;
+  /// The newest sample taken (the one a per-sample frame was published for), as its device
+  /// stamped it: ImuSample::seq and ImuSample::t_device_ns. A client can tell from them which
+  /// sample a frame shows (mocap bench latency matches its writes by them).
+  uint32_t seq = 0;
+  int64_t t_device_ns = 0;
 };
 static_assert(sizeof(SensorStatus) % 8 == 0);
 
