@@ -112,9 +112,8 @@ double Alignment::set_facing(int s, const Facing& f) {
   const double change = wrap_angle_rad(f.yaw_rad - old_rad);
   // An own-frame sensor's frame turns by -change onto the body; the segment keeps its capture
   // pose.
-  if (a.own_frame) realign(s, -change, f.source, f.sigma_deg);
+  if (a.own_frame) realign(s, -change, f.source, f.sigma_deg);  // changes the calibration
   a.facing = f;
-  ++revision_;
   return change;
 }
 

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 #include "mocap/core/segments.hpp"
 #include "mocap/core/units.hpp"
@@ -59,7 +60,12 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       field_watch_(sensors_.size()),
       prev_t_ns_(sensors_.size(), 0),
       prev_w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
-      prev_w_t_ns_(sensors_.size(), 0) {
+      prev_w_t_ns_(sensors_.size(), 0),
+      hinges_{{{index(Segment::thigh_l), index(Segment::shank_l), HingeAxisEstimator(1)},
+               {index(Segment::thigh_r), index(Segment::shank_r), HingeAxisEstimator(1)},
+               {index(Segment::upper_arm_l), index(Segment::forearm_l), HingeAxisEstimator(-1)},
+               {index(Segment::upper_arm_r), index(Segment::forearm_r), HingeAxisEstimator(-1)}}},
+      w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()) {
   opt_.calibration = calibration_setup(sensors_, opt_);
   align_revision_seen_ = align_.revision();
 }
@@ -132,9 +138,18 @@ void BodyTracker::on_sample(int i, const ImuSample& in) {
     capturer_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
     if (capturer_.done(s.t_host_ns)) finish_calibration();
   }
+  // 5. Mounting from motion: the mounting motion's window, the knees' and elbows' axes.
   if (mounting_.active()) {
     mounting_.add(seg, q, s.t_host_ns);
-    if (mounting_.done(s.t_host_ns)) apply_motion_facings(mounting_.finish());
+    if (mounting_.done(s.t_host_ns)) apply_facings(mounting_.finish());
+  }
+  if (s.has(kFieldGyr)) w_rad_s_[k] = s.gyr_rad_s - o.gyro_bias_rad_s;
+  const RigMapping& rig = skeleton_.rig();
+  for (Hinge& h : hinges_) {
+    if (h.lower != seg || !rig.tracked(h.upper) || !s.has(kFieldGyr)) continue;
+    const int up = rig.sensor_for_segment[h.upper];
+    h.axis.add(q_earth_sensor(up), q, w_rad_s_[static_cast<size_t>(up)], w_rad_s_[k], s.t_host_ns);
+    if (h.axis.updated()) apply_hinge_axes(h);
   }
   // 5. 6D: the heading of the sensors whose facing the calibration could not give, from motion.
   if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
@@ -169,24 +184,59 @@ void BodyTracker::finish_calibration() {
   start_heading_from_motion();
   if (mounting_motion_next_ && captured.capture.pose == CalibrationPose::npose)
     mounting_.start(captured.capture, captured.capture.t_end_ns, opt_.mounting_motion_s);
+  // The hinges are straight in the pose: their angles count from here.
+  for (Hinge& h : hinges_)
+    h.axis.reset(captured.capture.pose == CalibrationPose::npose ? captured.capture.t_end_ns : 0);
 }
 
-void BodyTracker::apply_motion_facings(const std::array<Facing, kSegmentCount>& facing) {
+void BodyTracker::apply_hinge_axes(Hinge& h) {
+  const HingeAxisEstimator& est = h.axis;
+  const int upper = h.upper, lower = h.lower;
+  // A real knee's axis is within a few degrees of the segment's lateral axis; the sign of each
+  // axis must be clear.
+  constexpr double kModelSigmaDeg = 5.0;
+  constexpr double kMinSignAgreement = 0.8;
+  if (!align_.has_capture() || est.sign_agreement() < kMinSignAgreement) return;
+  std::array<Facing, kSegmentCount> f{};
+  const PoseCapture& c = align_.capture();
+  const double sigma = est.sigma_deg();
+  for (const auto& [s, j] : {std::pair{upper, est.axis1()}, std::pair{lower, est.axis2()}}) {
+    // The axis points to the left (+y); forward is y x z.
+    const Eigen::Vector3d forward = j.cross(c.up_sensor(s));
+    if (forward.norm() < 0.5) continue;  // the axis near the segment's long axis: no yaw in it
+    f[s] =
+        facing_from_axis(c, s, forward, std::hypot(kModelSigmaDeg, sigma), AlignSource::hinge_axis);
+  }
+  apply_facings(f);
+}
+
+void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing) {
   std::array<bool, kSegmentCount> shared{};
+  AlignSource source = AlignSource::none;
   for (int s = 0; s < kSegmentCount; ++s) {
     const SegmentAlignment& a = align_.segment(s);
     if (!facing[s].known() || !a.aligned) continue;
-    if (!a.facing.known() || facing[s].sigma_deg < a.facing.sigma_deg)
+    if (replaces(a.facing, facing[s])) {
       align_.set_facing(s, facing[s]);
+      heading_.stop(s);  // its heading follows the facing now, not a fit
+      refine_[s] = false;
+    }
     shared[s] = !a.own_frame;
+    source = facing[s].source;
   }
-  // The body heading from the sensors sharing the earth frame, when surer than the one used.
+  // The body heading from the sensors sharing the earth frame, where it replaces the one used.
   const BodyHeading b = body_heading_from_facings(facing, shared);
   double sigma_deg = 180;
   for (int s = 0; s < kSegmentCount; ++s)
     if (b.agreed[s]) sigma_deg = std::min(sigma_deg, facing[s].sigma_deg);
-  if (b.heading_rad && sigma_deg < align_.body_heading_sigma_deg()) {
-    align_.set_body_heading(*b.heading_rad, AlignSource::motion, sigma_deg);
+  // The body heading turns every mounting: it changes only where none was known or once from
+  // the mounting motion (a calibration step), never by the running updates of an estimate.
+  const Facing held{align_.body_heading_rad(), align_.body_heading_sigma_deg(),
+                    align_.body_heading_source()};
+  const bool first_motion = source == AlignSource::motion && held.source != AlignSource::motion &&
+                            sigma_deg < held.sigma_deg;
+  if (b.heading_rad && held.source != source && (!held.known() || first_motion)) {
+    align_.set_body_heading(*b.heading_rad, source, sigma_deg);
     // A sensor whose motion agrees with the body heading was not in a local field: its site
     // prior was off (not on its site, or the pose turned there).
     for (size_t k = 0; k < sensors_.size(); ++k) {
@@ -194,7 +244,6 @@ void BodyTracker::apply_motion_facings(const std::array<Facing, kSegmentCount>& 
       if (sg >= 0 && b.agreed[sg]) field_watch_[k] = LocalFieldWatch{};
     }
   }
-  start_heading_from_motion();
 }
 
 void BodyTracker::solve(int64_t t_ns, PoseFrame& out) {
@@ -356,6 +405,7 @@ void BodyTracker::start_heading_from_motion() {
 void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   constexpr int64_t kEveryNs = 100'000'000;  // 10 Hz: the alignment is a slow constant
   constexpr double kMinTurnRad = 0.1 * kRadPerDeg;
+  constexpr double kImplausibleTurnDeg = 45.0;
   if (t_ns - heading_applied_t_ns_ < kEveryNs) return;
   const double max_turn_rad =
       opt_.heading_from_motion.max_drift_deg_s * kRadPerDeg * static_cast<double>(kEveryNs) * 1e-9;
@@ -373,8 +423,15 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
       yaw -= std::copysign(dead_band_rad, yaw);
     }
     // The first estimate aligns; afterwards the alignment only follows the slow drift of the
-    // 6D heading, so a stretch of misleading motion cannot turn it over.
-    if (heading_found_[s]) yaw = std::clamp(yaw, -max_turn_rad, max_turn_rad);
+    // 6D heading, so a stretch of misleading motion cannot turn it over, and evidence far off a
+    // found alignment (a flip) is refused and reported.
+    if (heading_found_[s]) {
+      if (std::abs(yaw) > kImplausibleTurnDeg * kRadPerDeg) {
+        align_.reject_turn(s);
+        continue;
+      }
+      yaw = std::clamp(yaw, -max_turn_rad, max_turn_rad);
+    }
     if (refine_[s]) {
       const double total_rad = std::clamp(turned_rad_[s] + yaw, -refine_max_rad, refine_max_rad);
       yaw = total_rad - turned_rad_[s];

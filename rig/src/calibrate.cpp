@@ -3,6 +3,7 @@
 // of the body heading.
 #include "mocap/rig/calibrate.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -129,8 +130,10 @@ CalibrationResult calibrate(const PoseCapturer::Result& captured, const Calibrat
   for (int s = 0; s < kSegmentCount; ++s)
     shared[s] = c.have[s] && !own_frame[s];
   std::string why;
-  const std::optional<double> heading =
-      configured_body_heading(c, setup, r.facing, shared, npose, why);
+  std::optional<double> heading = configured_body_heading(c, setup, r.facing, shared, npose, why);
+  // Without a sensor sharing the earth frame (6D) the body heading is a convention: +x.
+  const bool any_shared = std::find(shared.begin(), shared.end(), true) != shared.end();
+  if (!any_shared && !heading) heading = 0.0;
   if (setup.heading == HeadingSource::arm_swing && !heading) {
     r.message = "calibration refused: " + why;
     return r;
@@ -149,8 +152,12 @@ CalibrationResult calibrate(const PoseCapturer::Result& captured, const Calibrat
     off << (off.tellp() > 0 ? ", " : "") << name(static_cast<Segment>(s)) << " "
         << std::lround(d * kDegPerRad) << " deg";
   }
-  out.align(c, h, setup.heading, body_source(setup.heading, r.body_heading_known),
-            r.body_heading_known ? kAxisSigmaDeg : 180.0, r.facing, own_frame);
+  out.align(c, h, setup.heading,
+            any_shared ? body_source(setup.heading, r.body_heading_known) : AlignSource::given,
+            !r.body_heading_known ? 180.0
+            : any_shared          ? kAxisSigmaDeg
+                                  : 0.0,
+            r.facing, own_frame);
   r.calibration = out.calibration();
   r.status = CalibrationStatus::ok;
 

@@ -21,7 +21,8 @@ test::SynthStream stream(double local_until_s) {
     return Eigen::Vector3d(0, 0, std::fmod(t, 8.0) < 2.0 ? 20 * test::kDeg : 0.0);
   };
   const Eigen::Vector3d earth(0, 20, -45);
-  const Eigen::Vector3d local = Eigen::AngleAxisd(30 * test::kDeg, Eigen::Vector3d::UnitZ()) * earth;
+  const Eigen::Vector3d local =
+      Eigen::AngleAxisd(30 * test::kDeg, Eigen::Vector3d::UnitZ()) * earth;
   c.mag_earth = [=](double t) -> Eigen::Vector3d { return t < local_until_s ? local : earth; };
   return test::make_stream(c);
 }

@@ -44,6 +44,8 @@ struct SegmentAlignment {
   double heading_rad = 0;  ///< the yaw in front of the sensor's orientation
   AlignSource heading_source = AlignSource::none;
   double heading_sigma_deg = 180;  ///< of the segment's heading relative to the body's
+  /// Turns from motion refused as implausible (a found heading is never turned over).
+  uint32_t rejected_turns = 0;
 };
 
 class Alignment {
@@ -79,6 +81,10 @@ class Alignment {
   /// The sensor's filter frame turned by yaw_rad since the capture (a local field left
   /// behind): the mounting turns so that the segment keeps its pose at the capture.
   void turn_mounting(int s, double yaw_rad, AlignSource source);
+  /// A turn of segment s from motion was refused as implausible (counted, reported).
+  void reject_turn(int s) {
+    if (s >= 0 && s < kSegmentCount) ++seg_[static_cast<size_t>(s)].rejected_turns;
+  }
   /// Heading reset (the person stands facing forward): every segment in `have` takes the
   /// pelvis's earth yaw (its twist about the vertical; the circular mean without a pelvis
   /// sensor), or target_heading_rad when given.

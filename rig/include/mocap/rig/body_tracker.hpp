@@ -30,6 +30,7 @@
 #include "mocap/rig/alignment.hpp"
 #include "mocap/rig/calibrate.hpp"
 #include "mocap/rig/heading_from_motion.hpp"
+#include "mocap/rig/hinge_axis.hpp"
 #include "mocap/rig/local_field_watch.hpp"
 #include "mocap/rig/mounting_motion.hpp"
 #include "mocap/rig/pose_capture.hpp"
@@ -169,9 +170,19 @@ class BodyTracker {
                                 const Eigen::Vector3d& gyro_bias_rad_s);
   /// Fits the segments whose facing is unknown (and refines those from a site normal).
   void start_heading_from_motion();
-  /// The mounting motion's facings: each replaces a less certain one; sensors sharing the earth
-  /// frame vote on the body heading.
-  void apply_motion_facings(const std::array<Facing, kSegmentCount>& facing);
+  /// Facings found from motion: each replaces a held one where replaces() says so; those of
+  /// sensors sharing the earth frame vote on the body heading.
+  void apply_facings(const std::array<Facing, kSegmentCount>& facing);
+  /// A hinge's axes: the facings of its two segments.
+  struct Hinge;
+  void apply_hinge_axes(Hinge& h);
+  /// Per knee and elbow: its segments and the estimator of its axis.
+  struct Hinge {
+    int upper, lower;
+    HingeAxisEstimator axis;
+  };
+  std::array<Hinge, 4> hinges_;
+  std::vector<Eigen::Vector3d> w_rad_s_;  ///< per sensor: its newest bias-free rate
   void apply_heading_from_motion(int64_t t_ns);
   /// Hands the sensors the calibration found off the body heading to their field watch.
   void suspect_local_fields(const CalibrationResult& r);

@@ -60,6 +60,10 @@ class HeadingFromMotion {
   bool estimate(int segment, double& yaw_rad) const;
   /// The caller turned the segment's alignment by yaw_rad: the fit continues in the new frame.
   void applied(int segment, double yaw_rad);
+  /// Segment s is no longer fitted (another source holds its heading).
+  void stop(int segment) {
+    if (segment >= 0 && segment < kSegmentCount) ref_[segment] = -1;
+  }
   bool active() const { return active_; }
   int reference(int segment) const { return ref_[segment]; }
 

@@ -1,0 +1,85 @@
+// A hinge joint's axis (knee, elbow) in each of its two sensors' frames, from their
+// inclinations alone. Turning about the hinge does not tilt the hinge's axis, so the axis has the
+// same elevation seen from either segment: (q1 j1).z = (q2 j2).z, i.e. u1.j1 = u2.j2 with u the
+// earth's up axis in each sensor's frame. No heading, magnetometer or mounting enters (a 6D
+// filter's frame has any heading): it finds the axis of a sensor strapped any way, from
+// ordinary motion that tilts the leg or arm (walking, running, sitting down, a squat). For a
+// sagittal motion the answer is the normal of the plane the up axes sweep in each frame. The
+// same constraint with the segments' angular rates (|w1 x j1| = |w2 x j2|, Seel et al. 2012)
+// was tried first: on the real running recording (shared/datasets/qmt-fullbody) the thigh's
+// soft tissue twists it at every foot strike at over 10 rad/s and the rate fit found the
+// femur's long axis; inclinations barely see that twist.
+//
+// The constraint's normal matrix, sum of v v^T with v = [u1; -u2] (6x6), is kept with
+// forgetting (kForgetS); its least eigenvector, each half normalised, is the pair of axes. The
+// gap to the next eigenvalue gives the one-sigma (a motion that tilts both segments the same
+// way all the time leaves two near-equal ones: no answer).
+//
+// Signs. The fit leaves the axes' signs open (both flipped together fit as well, and one
+// flipped alone does too while the axis stays level). The rates integrated since the
+// calibration pose (straight knee and elbow) give the joint angle for any pair of signs,
+// theta = I2.j2 - I1.j1; a real knee flexes one way from straight (an elbow the other), so the
+// pair whose angle stays within [-kOvershootDeg, kMaxFlexDeg] on the flexing side in most
+// recent samples points both axes to the left of the body (the segment frame's +y). add()
+// never allocates: the ring of integrals is sized at construction.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+namespace mocap::rig {
+
+class HingeAxisEstimator {
+ public:
+  static constexpr double kSolveEveryS = 1.0;
+  static constexpr double kSampleEveryS = 0.02;  ///< at most one sample per this
+  static constexpr double kForgetS = 120.0;
+  /// Before a first answer: this much tilt evidence (sum of |u - u_mean|^2 over samples).
+  static constexpr double kMinEvidence = 20.0;
+  static constexpr double kOvershootDeg = 15.0;
+  static constexpr double kMaxFlexDeg = 165.0;
+
+  /// flex_sign: +1 a knee (flexion positive about the left axis), -1 an elbow.
+  explicit HingeAxisEstimator(int flex_sign = 1, int capacity = 1000);
+
+  /// Starts over from a calibration pose (the joint straight at t_ns); 0: stops.
+  void reset(int64_t t_ns);
+  /// The upper (1) and lower (2) segments' sensors: orientation (any heading frame) and
+  /// bias-free rate (own frame), at sample time t_ns.
+  void add(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2,
+           const Eigen::Vector3d& w1_rad_s, const Eigen::Vector3d& w2_rad_s, int64_t t_ns);
+  /// A new estimate since the last call (solved and signed).
+  bool updated();
+
+  bool known() const { return known_; }
+  /// The axis in each sensor's frame, pointing to the body's left (unit).
+  const Eigen::Vector3d& axis1() const { return j1_; }
+  const Eigen::Vector3d& axis2() const { return j2_; }
+  /// One-sigma of the axes' directions, degrees.
+  double sigma_deg() const { return sigma_deg_; }
+  /// Share of recent samples whose angle was on the flexing side (how sure the signs are).
+  double sign_agreement() const { return sign_agreement_; }
+
+ private:
+  struct Entry {
+    Eigen::Vector3d i1, i2;  ///< rates integrated since reset
+  };
+  void solve();
+  void choose_signs();
+
+  int flex_sign_;
+  std::vector<Entry> ring_;
+  int head_ = 0, count_ = 0;
+  int64_t t0_ns_ = 0, t_prev_ns_ = 0, t_entry_ns_ = 0, t_solve_ns_ = 0;
+  Eigen::Vector3d i1_ = Eigen::Vector3d::Zero(), i2_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix<double, 6, 6> normal_ = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> sum_ = Eigen::Matrix<double, 6, 1>::Zero();
+  double weight_ = 0;
+  bool known_ = false, updated_ = false;
+  Eigen::Vector3d j1_ = Eigen::Vector3d::UnitY(), j2_ = Eigen::Vector3d::UnitY();
+  double sigma_deg_ = 180, sign_agreement_ = 0;
+};
+
+}  // namespace mocap::rig

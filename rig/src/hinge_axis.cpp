@@ -1,0 +1,138 @@
+// HingeAxisEstimator: a hinge's axis in both sensors' frames from their inclinations (see
+// hinge_axis.hpp).
+#include "mocap/rig/hinge_axis.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "mocap/core/units.hpp"
+
+namespace mocap::rig {
+namespace {
+
+/// Noise floor of the elevation residual u.j (inclination error of a filter, ~0.6 deg).
+constexpr double kResidualFloor = 0.01;
+/// Residuals (soft tissue, the joint's own play) stay correlated about this long.
+constexpr double kCorrelationS = 0.5;
+
+/// Smallest curvature of j^T s j across the unit vector j (the flattest way to turn it).
+double least_curvature(const Eigen::Matrix3d& s, const Eigen::Vector3d& j) {
+  const Eigen::Vector3d a =
+      std::abs(j.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d u = j.cross(a).normalized(), v = j.cross(u);
+  Eigen::Matrix2d t;
+  t << u.dot(s * u), u.dot(s * v), v.dot(s * u), v.dot(s * v);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(t);
+  return std::max(es.eigenvalues()[0], 0.0);
+}
+
+}  // namespace
+
+HingeAxisEstimator::HingeAxisEstimator(int flex_sign, int capacity)
+    : flex_sign_(flex_sign >= 0 ? 1 : -1), ring_(static_cast<size_t>(std::max(capacity, 16))) {}
+
+void HingeAxisEstimator::reset(int64_t t_ns) {
+  head_ = count_ = 0;
+  t0_ns_ = t_prev_ns_ = t_entry_ns_ = t_solve_ns_ = t_ns;
+  i1_.setZero();
+  i2_.setZero();
+  normal_.setZero();
+  sum_.setZero();
+  weight_ = 0;
+  known_ = updated_ = false;
+  j1_ = j2_ = Eigen::Vector3d::UnitY();
+  sigma_deg_ = 180;
+  sign_agreement_ = 0;
+}
+
+void HingeAxisEstimator::add(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2,
+                             const Eigen::Vector3d& w1, const Eigen::Vector3d& w2, int64_t t_ns) {
+  if (t0_ns_ == 0 || t_ns <= t_prev_ns_ || !w1.allFinite() || !w2.allFinite() ||
+      !q1.coeffs().allFinite() || !q2.coeffs().allFinite())
+    return;
+  const double dt_s = std::min(static_cast<double>(t_ns - t_prev_ns_) * 1e-9, 0.1);
+  t_prev_ns_ = t_ns;
+  i1_ += w1 * dt_s;
+  i2_ += w2 * dt_s;
+  const double since_s = static_cast<double>(t_ns - t_entry_ns_) * 1e-9;
+  if (since_s < kSampleEveryS) return;
+  t_entry_ns_ = t_ns;
+  // The elevation constraint's normal matrix, forgotten over kForgetS.
+  Eigen::Matrix<double, 6, 1> v;
+  v << q1.normalized().conjugate() * Eigen::Vector3d::UnitZ(),
+      -(q2.normalized().conjugate() * Eigen::Vector3d::UnitZ());
+  const double keep = std::exp(-since_s / kForgetS);
+  normal_ = keep * normal_ + v * v.transpose();
+  sum_ = keep * sum_ + v;
+  weight_ = keep * weight_ + 1;
+  // The joint angle's integrals while either segment turns (for the signs).
+  if (w1.norm() > 0.3 || w2.norm() > 0.3) {
+    ring_[static_cast<size_t>(head_)] = Entry{i1_, i2_};
+    head_ = (head_ + 1) % static_cast<int>(ring_.size());
+    count_ = std::min(count_ + 1, static_cast<int>(ring_.size()));
+  }
+  if (static_cast<double>(t_ns - t_solve_ns_) * 1e-9 < kSolveEveryS) return;
+  t_solve_ns_ = t_ns;
+  solve();
+}
+
+bool HingeAxisEstimator::updated() {
+  const bool u = updated_;
+  updated_ = false;
+  return u;
+}
+
+void HingeAxisEstimator::solve() {
+  if (weight_ < 1) return;
+  // Enough tilt: the up axes' spread in both frames.
+  const Eigen::Matrix<double, 6, 1> mean = sum_ / weight_;
+  const Eigen::Matrix<double, 6, 6> cov = normal_ - weight_ * mean * mean.transpose();
+  if (cov.block<3, 3>(0, 0).trace() < kMinEvidence * 0.5 ||
+      cov.block<3, 3>(3, 3).trace() < kMinEvidence * 0.5)
+    return;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(normal_);
+  const Eigen::Matrix<double, 6, 1> x = es.eigenvectors().col(0);
+  const double n1 = x.head<3>().norm(), n2 = x.tail<3>().norm();
+  if (n1 < 0.3 || n2 < 0.3) return;  // one segment alone explains it: not a hinge's axis
+  Eigen::Vector3d j1 = x.head<3>() / n1, j2 = x.tail<3>() / n2;
+  // Residual per sample and the flattest curvature across each axis.
+  Eigen::Matrix<double, 6, 1> xs;
+  xs << j1, j2;
+  const double residual2 = std::max(xs.dot(normal_ * xs), 0.0) / weight_;
+  const double k1 = least_curvature(normal_.block<3, 3>(0, 0) / weight_, j1);
+  const double k2 = least_curvature(normal_.block<3, 3>(3, 3) / weight_, j2);
+  // Samples a correlation time apart count as independent.
+  const double independent = std::max(1.0, weight_ * kSampleEveryS / kCorrelationS);
+  const double var = residual2 + kResidualFloor * kResidualFloor;
+  sigma_deg_ = std::min(
+      180.0, std::sqrt(var / (std::max(std::min(k1, k2), 1e-12) * independent)) * kDegPerRad);
+  j1_ = j1;
+  j2_ = j2;
+  choose_signs();
+  known_ = updated_ = true;
+}
+
+void HingeAxisEstimator::choose_signs() {
+  // The pair of signs whose joint angle since the straight calibration pose stays on the
+  // flexing side in most recent samples.
+  const double lo = -kOvershootDeg * kRadPerDeg, hi = kMaxFlexDeg * kRadPerDeg;
+  std::array<int, 4> on_side{};
+  const std::array<std::array<double, 2>, 4> signs = {{{1, 1}, {1, -1}, {-1, 1}, {-1, -1}}};
+  for (int k = 0; k < count_; ++k) {
+    const Entry& e = ring_[static_cast<size_t>(k)];
+    const double a1 = e.i1.dot(j1_), a2 = e.i2.dot(j2_);
+    for (size_t c = 0; c < 4; ++c) {
+      const double theta = flex_sign_ * (signs[c][1] * a2 - signs[c][0] * a1);
+      on_side[c] += theta >= lo && theta <= hi;
+    }
+  }
+  const size_t best =
+      static_cast<size_t>(std::max_element(on_side.begin(), on_side.end()) - on_side.begin());
+  j1_ *= signs[best][0];
+  j2_ *= signs[best][1];
+  sign_agreement_ = static_cast<double>(on_side[best]) / std::max(count_, 1);
+}
+
+}  // namespace mocap::rig
