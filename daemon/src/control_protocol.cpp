@@ -59,9 +59,11 @@ std::optional<ControlRequest> parse_control_request(std::string_view line, std::
   if (cmd == "reset-heading") return no_args(ControlCommand::reset_heading);
   if (cmd == "quit") return no_args(ControlCommand::quit);
   if (cmd == "calibrate") {
-    const std::string_view pose = next_word(rest);  // none: the configured calibration.pose
-    if ((!pose.empty() && pose != "npose" && pose != "tpose") || !rest.empty()) {
-      error = "usage: calibrate [npose|tpose]";
+    // none: the configured calibration.pose; mounting: an N-pose, then the mounting motion
+    const std::string_view pose = next_word(rest);
+    if ((!pose.empty() && pose != "npose" && pose != "tpose" && pose != "mounting") ||
+        !rest.empty()) {
+      error = "usage: calibrate [npose|tpose|mounting]";
       return std::nullopt;
     }
     r.command = ControlCommand::calibrate;

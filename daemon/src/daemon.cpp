@@ -12,6 +12,7 @@
 
 #include "mocap/core/segments.hpp"
 #include "mocap/core/time.hpp"
+#include "mocap/rig/body_tracker.hpp"
 
 namespace mocap::daemon {
 
@@ -193,10 +194,19 @@ std::string Daemon::handle(const ControlRequest& r) {
       // No pose named: the configured one (calibration.pose).
       const std::string pose =
           r.argument.empty() ? std::string(to_string(cfg_.calibration.pose)) : r.argument;
-      pipeline_->calibrate(pose == "tpose" ? CalibrationPose::tpose : CalibrationPose::npose);
-      ok["message"] = "calibration (" + pose + ") in " +
-                      std::to_string(static_cast<int>(std::lround(cfg_.calibration.countdown_s))) +
-                      " s: hold the pose";
+      const bool mounting = pose == "mounting";
+      pipeline_->calibrate(pose == "tpose" ? CalibrationPose::tpose : CalibrationPose::npose,
+                           mounting);
+      const std::string in =
+          std::to_string(static_cast<int>(std::lround(cfg_.calibration.countdown_s))) + " s";
+      ok["message"] = mounting
+                          ? "mounting calibration in " + in +
+                                ": hold the N-pose, then bow and bend the knees twice, curling the "
+                                "elbows, within " +
+                                std::to_string(static_cast<int>(
+                                    std::lround(rig::TrackerOptions{}.mounting_motion_s))) +
+                                " s"
+                          : "calibration (" + pose + ") in " + in + ": hold the pose";
       return ok.dump();
     }
     case ControlCommand::reset_heading:
@@ -297,6 +307,7 @@ std::string Daemon::status_json() const {
     const CalibrationProgress& c = st.calibration;
     nlohmann::json cal;
     cal["message"] = std::string(c.message.data(), strnlen(c.message.data(), c.message.size()));
+    cal["mounting_motion"] = c.mounting_motion;
     j["calibration"] = cal;
   }
   {
@@ -347,6 +358,15 @@ std::string Daemon::status_json() const {
     e["calibrated"] = (s.flags & kSegCalibrated) != 0;
     e["gyro_bias_dps"] = round_to(s.gyro_bias_dps, 1000);
     e["heading_sigma_deg"] = round_to(s.heading_sigma_deg, 10);
+    // Its segment's alignment: where mounting and heading came from and how sure each is.
+    if (s.segment >= 0 && s.segment < kSegmentCount) {
+      const SegmentAlignmentStatus& a = st.calibration.segments[static_cast<size_t>(s.segment)];
+      e["mounting"] = {{"source", rig::to_string(a.mounting_source)},
+                       {"sigma_deg", round_to(a.mounting_sigma_deg, 10)}};
+      e["alignment_heading"] = {{"source", rig::to_string(a.heading_source)},
+                                {"sigma_deg", round_to(a.heading_sigma_deg, 10)},
+                                {"rejected_turns", a.rejected_turns}};
+    }
     add_telemetry(st.telemetry[i], e);
     sensors.push_back(e);
   }

@@ -1,5 +1,5 @@
 // mocapctl: control client for a running mocapd (talks over its Unix-domain control socket).
-//   mocapctl [--socket PATH] [--json] status | calibrate [npose|tpose] | reset-heading |
+//   mocapctl [--socket PATH] [--json] status | calibrate [npose|tpose|mounting] | reset-heading |
 //            record start [NAME] | record stop | quit
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -33,8 +33,10 @@ void declare_options(CLI::App& app, Options& o) {
   CLI::App* cal = cli::add_command(
       app, "calibrate",
       "start a calibration (countdown, then hold the pose); no POSE: the daemon's configured "
-      "calibration.pose");
-  cal->add_option("POSE", o.pose, "npose or tpose")->check(CLI::IsMember({"npose", "tpose"}));
+      "calibration.pose; mounting: an N-pose, then bow and bend the knees twice with the elbows "
+      "curling (each sensor's mounting found from its tilt, docs/skeleton.md)");
+  cal->add_option("POSE", o.pose, "npose, tpose or mounting")
+      ->check(CLI::IsMember({"npose", "tpose", "mounting"}));
   cal->callback([&o] { o.line = o.pose.empty() ? "calibrate" : "calibrate " + o.pose; });
   cli::add_command(app, "reset-heading", "re-align the heading (stand upright facing forward)")
       ->callback([&o] { o.line = "reset-heading"; });
@@ -66,10 +68,19 @@ void print_status_table(const nlohmann::json& j) {
   }
   const std::string rec = j.value("recording", std::string());
   std::printf("recording: %s\n", rec.empty() ? "no" : rec.c_str());
-  std::printf("%-16s %-12s %-10s %8s %9s %7s %7s %5s %5s %9s %8s\n", "SENSOR", "SEGMENT", "STATE",
-              "RATE_HZ", "AGE_MS", "DROPS", "ERRORS", "REST", "MAG", "BIAS_DPS", "HDG_SD");
+  std::printf("%-16s %-12s %-10s %8s %9s %7s %7s %5s %5s %9s %8s  %s\n", "SENSOR", "SEGMENT",
+              "STATE", "RATE_HZ", "AGE_MS", "DROPS", "ERRORS", "REST", "MAG", "BIAS_DPS", "HDG_SD",
+              "MOUNTING");
   for (const auto& s : j.value("sensors", nlohmann::json::array())) {
-    std::printf("%-16s %-12s %-10s %8.1f %9.1f %7llu %7llu %5s %5s %9.3f %8.1f\n",
+    // Its mounting's source and one-sigma ("none": found from motion later).
+    std::string mounting = "-";
+    if (const auto m = s.find("mounting"); m != s.end() && m->is_object()) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%s +-%.0f deg", m->value("source", std::string()).c_str(),
+                    m->value("sigma_deg", 0.0));
+      mounting = m->value("source", std::string()) == "none" ? "none (from motion)" : buf;
+    }
+    std::printf("%-16s %-12s %-10s %8.1f %9.1f %7llu %7llu %5s %5s %9.3f %8.1f  %s\n",
                 s.value("name", std::string()).c_str(), s.value("segment", std::string()).c_str(),
                 s.value("state", std::string()).c_str(), s.value("rate_hz", 0.0),
                 s.value("age_ms", 0.0), static_cast<unsigned long long>(s.value("drops", 0ull)),
@@ -78,7 +89,7 @@ void print_status_table(const nlohmann::json& j) {
                 s.value("mag_disturbed", false)      ? "dist"
                 : s.value("mag_no_reference", false) ? "noref"
                                                      : "ok",
-                s.value("gyro_bias_dps", 0.0), s.value("heading_sigma_deg", 0.0));
+                s.value("gyro_bias_dps", 0.0), s.value("heading_sigma_deg", 0.0), mounting.c_str());
   }
   // What trackers report about themselves (SlimeVR: battery, signal, temperature, identity),
   // one line per sensor that reported anything.

@@ -100,9 +100,10 @@ void Pipeline::set_device_sensor(uint16_t device_index, int sensor) {
   device_sensor_[device_index] = sensor;
 }
 
-void Pipeline::calibrate(CalibrationPose pose) {
+void Pipeline::calibrate(CalibrationPose pose, bool mounting_motion) {
   std::lock_guard lock(cmd_mu_);
-  commands_.push_back({Command::calibrate, pose});
+  commands_.push_back(
+      {.kind = Command::calibrate, .pose = pose, .mounting_motion = mounting_motion});
   wake_.notify();
 }
 
@@ -114,7 +115,7 @@ void Pipeline::reset_heading() {
 
 void Pipeline::set_frame_flag(uint32_t flag, bool on) {
   std::lock_guard lock(cmd_mu_);
-  commands_.push_back({Command::flag, CalibrationPose::npose, flag, on});
+  commands_.push_back({.kind = Command::flag, .flag_bits = flag, .on = on});
   wake_.notify();
 }
 
@@ -168,7 +169,7 @@ void Pipeline::apply_commands(int64_t now_ns) {
   for (const Command& c : commands_work_) {
     switch (c.kind) {
       case Command::calibrate:
-        core_.request_calibration(c.pose, now_ns);
+        core_.request_calibration(c.pose, now_ns, c.mounting_motion);
         break;
       case Command::reset_heading:
         core_.reset_heading();

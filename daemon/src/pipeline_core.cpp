@@ -80,17 +80,19 @@ void PipelineCore::advance_clock_to(int64_t t_ns) {
   }
 }
 
-void PipelineCore::request_calibration(CalibrationPose pose, int64_t t_now_ns) {
+void PipelineCore::request_calibration(CalibrationPose pose, int64_t t_now_ns,
+                                       bool mounting_motion) {
   calibrating_ = true;
   state_changed_ = true;
   calib_pose_ = pose;
+  calib_mounting_motion_ = mounting_motion && pose == CalibrationPose::npose;
   calib_at_ns_ = t_now_ns + static_cast<int64_t>(calib_.countdown_s * 1e9);
   maybe_finish_calibration(t_now_ns);
 }
 
 void PipelineCore::maybe_finish_calibration(int64_t t_now_ns) {
   if (calibrating_ && t_now_ns >= calib_at_ns_) {
-    engine_.calibrate(calib_pose_);
+    engine_.calibrate(calib_pose_, calib_mounting_motion_);
     calibrating_ = false;
     state_changed_ = true;
   }

@@ -253,7 +253,7 @@ ReplayResult run_replay(SampleSource& src, PipelineCore& core, const ReplayOptio
     }
     if (calibration_pending &&
         s.t_host_ns - r.t_first_ns >= static_cast<int64_t>(opt.calibrate_at_s * 1e9)) {
-      core.request_calibration(*opt.calibrate_pose, s.t_host_ns);
+      core.request_calibration(*opt.calibrate_pose, s.t_host_ns, opt.calibrate_mounting_motion);
       calibration_pending = false;
     }
     if (opt.speed > 0) {

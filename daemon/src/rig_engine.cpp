@@ -94,11 +94,25 @@ CalibrationProgress RigEngine::calibration_progress() const {
   CalibrationProgress p;
   const size_t n = std::min(calib_message_.size(), p.message.size() - 1);
   std::copy_n(calib_message_.begin(), n, p.message.begin());
+  p.mounting_motion = tracker_.watching_mounting_motion();
+  const rig::Alignment& a = tracker_.alignment();
+  for (int s = 0; s < kSegmentCount; ++s) {
+    const rig::SegmentAlignment& g = a.segment(s);
+    SegmentAlignmentStatus& o = p.segments[static_cast<size_t>(s)];
+    // A sensor sharing the earth frame has the body heading's mounting yaw.
+    const bool body = g.aligned && !g.own_frame;
+    o.mounting_source = body ? a.body_heading_source() : g.facing.source;
+    o.mounting_sigma_deg =
+        static_cast<float>(body ? a.body_heading_sigma_deg() : g.facing.sigma_deg);
+    o.heading_source = g.heading_source;
+    o.heading_sigma_deg = static_cast<float>(g.heading_sigma_deg);
+    o.rejected_turns = g.rejected_turns;
+  }
   return p;
 }
 
-void RigEngine::calibrate(CalibrationPose pose) {
-  tracker_.start_calibration(pose, tracker_.newest_t_ns());
+void RigEngine::calibrate(CalibrationPose pose, bool mounting_motion) {
+  tracker_.start_calibration(pose, tracker_.newest_t_ns(), mounting_motion);
 }
 
 void RigEngine::reset_heading() {

@@ -40,6 +40,9 @@ TEST(ControlProtocol, ParsesCommands) {
   r = parse_control_request("calibrate tpose", err);
   ASSERT_TRUE(r);
   EXPECT_EQ(r->argument, "tpose");
+  r = parse_control_request("calibrate mounting", err);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->argument, "mounting");
   r = parse_control_request("record start /tmp/my session.mocapses\n", err);
   ASSERT_TRUE(r);
   EXPECT_EQ(r->command, ControlCommand::record_start);

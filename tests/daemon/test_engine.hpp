@@ -49,7 +49,7 @@ class GyroEngine final : public daemon::PoseEngine {
     s.calibrated = calibrations > 0;
     return s;
   }
-  void calibrate(daemon::CalibrationPose) override { ++calibrations; }
+  void calibrate(daemon::CalibrationPose, bool) override { ++calibrations; }
   void reset_heading() override { ++heading_resets; }
 };
 

@@ -79,7 +79,7 @@ void drive(RigEngine& engine, sim::Performer& perf, double end_s, double capture
     for (const ImuSample& s : samples)
       engine.on_sample(s.sensor_id, s);
     if (!capture_started && k * 0.01 >= capture_at_s) {
-      engine.calibrate(CalibrationPose::npose);
+      engine.calibrate(CalibrationPose::npose, false);
       capture_started = true;
     }
     engine.build_frame(t_ns, frame);

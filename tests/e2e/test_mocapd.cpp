@@ -309,8 +309,20 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
     }
   }
   ASSERT_TRUE(calibrated) << st.dump() << slurp_file((dir / "mocapd.log.err").string());
-  for (const auto& s : st["sensors"])
+  for (const auto& s : st["sensors"]) {
     EXPECT_TRUE(s["calibrated"].get<bool>()) << s.dump();
+    // Each sensor's mounting and heading alignment: where it came from and how sure.
+    EXPECT_NE(s["mounting"]["source"].get<std::string>(), "none") << s.dump();
+    EXPECT_LT(s["mounting"]["sigma_deg"].get<double>(), 90) << s.dump();
+    EXPECT_TRUE(s["alignment_heading"].contains("rejected_turns")) << s.dump();
+  }
+  // A mounting calibration is taken and says what to do.
+  {
+    std::string reply;
+    ASSERT_EQ(run({kBin + "mocapctl", "--socket", sock, "calibrate", "mounting"}, &reply), 0)
+        << reply;
+    EXPECT_NE(reply.find("bend the knees"), std::string::npos) << reply;
+  }
   // The status tells how the calibration went and how far the performer stood from the pose.
   EXPECT_EQ(st["calibration"]["message"].get<std::string>().rfind("calibrated in npose", 0), 0u)
       << st.dump();

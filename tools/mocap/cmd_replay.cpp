@@ -1,7 +1,7 @@
 // mocap replay: runs a recorded session or a CSV of samples offline through the daemon's
 // pipeline (filter -> calibration -> skeleton) and writes BVH and/or pose CSV.
 //   mocap replay INPUT [--config RIG.toml] [--set K=V] [--bvh OUT.bvh] [--csv OUT.csv]
-//                [--calibrate npose@SECONDS|tpose@SECONDS] [--source raw|samples]
+//                [--calibrate npose@SECONDS|tpose@SECONDS|mounting@SECONDS] [--source raw|samples]
 #include <unistd.h>
 
 #include <cmath>
@@ -58,11 +58,13 @@ class BvhSink final : public FrameSink {
   std::unique_ptr<BvhWriter> writer_;
 };
 
-bool parse_calibrate(const std::string& s, mocap::CalibrationPose& pose, double& at_s) {
+bool parse_calibrate(const std::string& s, mocap::CalibrationPose& pose, bool& mounting,
+                     double& at_s) {
   const auto at = s.find('@');
   if (at == std::string::npos) return false;
   const std::string p = s.substr(0, at);
-  if (p == "npose")
+  mounting = p == "mounting";
+  if (p == "npose" || mounting)
     pose = mocap::CalibrationPose::npose;
   else if (p == "tpose")
     pose = mocap::CalibrationPose::tpose;
@@ -97,7 +99,8 @@ int run_replay(const ReplayCommandOptions& o) {
   ReplayOptions opt;
   if (!o.calibrate.empty()) {
     mocap::CalibrationPose pose;
-    parse_calibrate(o.calibrate, pose, opt.calibrate_at_s);  // checked by the option
+    parse_calibrate(o.calibrate, pose, opt.calibrate_mounting_motion,
+                    opt.calibrate_at_s);  // checked by the option
     opt.calibrate_pose = pose;
   }
   const SessionSource which = o.source == "raw"       ? SessionSource::raw
@@ -193,14 +196,16 @@ void add_replay(CLI::App& app, int& exit_code) {
       c->add_option("--csv", o->csv, "write the poses as CSV: t,segment,w,x,y,z,px,py,pz");
   cli::add_deprecated_alias(*c, "--poses", o->csv_alias, csv);
   c->add_option("--calibrate", o->calibrate,
-                "calibrate at a moment of the input: npose@SECONDS or tpose@SECONDS")
+                "calibrate at a moment of the input: npose@SECONDS, tpose@SECONDS, or "
+                "mounting@SECONDS (an N-pose, then the mounting motion)")
       ->check(CLI::Validator(
           [](std::string& v) {
             mocap::CalibrationPose pose;
+            bool mounting = false;
             double at_s = 0;
-            return parse_calibrate(v, pose, at_s)
+            return parse_calibrate(v, pose, mounting, at_s)
                        ? std::string()
-                       : "needs npose@SECONDS or tpose@SECONDS, got '" + v + "'";
+                       : "needs npose@SECONDS, tpose@SECONDS or mounting@SECONDS, got '" + v + "'";
           },
           "POSE@SECONDS"));
   c->add_option("--source", o->source,

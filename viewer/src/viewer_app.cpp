@@ -80,6 +80,10 @@ void on_key(GLFWwindow* w, int key, int /*scancode*/, int action, int mods) {
       a.view->hud.calibration_pose = "T-POSE";
       a.control(calibrate_request("tpose"), "T-POSE CALIBRATION");
       break;
+    case GLFW_KEY_M:
+      a.view->hud.calibration_pose = "N-POSE, THEN BOW AND BEND THE KNEES TWICE";
+      a.control(calibrate_request("mounting"), "MOUNTING CALIBRATION");
+      break;
     case GLFW_KEY_H:
       a.control(heading_reset_request(), "HEADING RESET");
       break;

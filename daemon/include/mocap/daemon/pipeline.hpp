@@ -69,7 +69,8 @@ class Pipeline final : public SampleSink {
   void set_device_sensor(uint16_t device_index, int sensor);
 
   // Commands (any thread; executed on the pipeline thread).
-  void calibrate(CalibrationPose pose);
+  /// With mounting_motion (an N-pose) the mounting motion follows the capture.
+  void calibrate(CalibrationPose pose, bool mounting_motion = false);
   void reset_heading();
   void set_frame_flag(uint32_t flag, bool on);
   /// Installs (or with nullptr removes) the recording tap. Returns once the old tap is no
@@ -91,6 +92,7 @@ class Pipeline final : public SampleSink {
   struct Command {
     enum Kind { calibrate, reset_heading, flag } kind;
     CalibrationPose pose = CalibrationPose::npose;
+    bool mounting_motion = false;
     uint32_t flag_bits = 0;
     bool on = false;
   };

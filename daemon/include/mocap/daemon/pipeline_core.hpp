@@ -68,7 +68,7 @@ class PipelineCore {
   void advance_clock_to(int64_t t_ns);
 
   /// Starts a calibration: capture after the configured countdown (measured from t_now_ns).
-  void request_calibration(CalibrationPose pose, int64_t t_now_ns);
+  void request_calibration(CalibrationPose pose, int64_t t_now_ns, bool mounting_motion = false);
   void reset_heading() { engine_.reset_heading(); }
   /// Frame-level flags the pipeline does not own (recording, replay, demo).
   void set_frame_flag(uint32_t flag, bool on);
@@ -124,6 +124,7 @@ class PipelineCore {
   bool state_changed_ = false;  ///< a flag or the calibration state changed since the last frame
   bool sample_since_frame_ = false;  ///< a sample was taken since the last frame
   CalibrationPose calib_pose_ = CalibrationPose::npose;
+  bool calib_mounting_motion_ = false;
   int64_t calib_at_ns_ = 0;
 };
 

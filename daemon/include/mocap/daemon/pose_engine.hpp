@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "mocap/core/imu_sample.hpp"
+#include "mocap/rig/facing.hpp"
 #include "mocap/rig/sensor_health.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
@@ -17,11 +18,22 @@ namespace mocap::daemon {
 /// The reference pose of a calibration (the skeleton module's enum).
 using CalibrationPose = mocap::CalibrationPose;
 
-/// How far the calibration has got (for the status): the last capture's outcome and each
-/// motion-identified mounting (knees, elbows, hands through the elbows). Fixed size: the
-/// pipeline copies it with every status snapshot.
+/// One segment's alignment as the status reports it (rig/alignment.hpp): where its mounting
+/// and its heading came from (rig::AlignSource) and how sure each is.
+struct SegmentAlignmentStatus {
+  rig::AlignSource mounting_source = rig::AlignSource::none;
+  rig::AlignSource heading_source = rig::AlignSource::none;
+  float mounting_sigma_deg = 180, heading_sigma_deg = 180;
+  uint32_t rejected_turns = 0;  ///< turns from motion refused as implausible
+};
+
+/// How far the calibration has got (for the status): the last capture's outcome, whether the
+/// mounting motion is being watched, and each segment's alignment. Fixed size: the pipeline
+/// copies it with every status snapshot.
 struct CalibrationProgress {
   std::array<char, 256> message{};  ///< last capture's outcome, NUL-terminated ("" if none)
+  bool mounting_motion = false;     ///< the mounting motion's window is open
+  std::array<SegmentAlignmentStatus, kSegmentCount> segments{};
 };
 
 /// One sensor's health (rig/sensor_health.hpp): produced once by the engine.
@@ -40,8 +52,9 @@ class PoseEngine {
   virtual SensorHealth sensor_health(int sensor_index) const = 0;
   /// The calibration's progress; engines without calibration report none.
   virtual CalibrationProgress calibration_progress() const { return {}; }
-  /// Takes the current sensor orientations as the given reference pose.
-  virtual void calibrate(CalibrationPose pose) = 0;
+  /// Takes the current sensor orientations as the given reference pose; with mounting_motion
+  /// (an N-pose) the mounting motion follows it (rig/mounting_motion.hpp).
+  virtual void calibrate(CalibrationPose pose, bool mounting_motion) = 0;
   /// Re-aligns the heading so the performer faces +x (east) now.
   virtual void reset_heading() = 0;
 };

@@ -52,6 +52,8 @@ struct ReplayOptions {
   double speed = 0;  ///< 0 = as fast as possible, 1 = real time, X = X times real time
   std::optional<CalibrationPose> calibrate_pose;  ///< calibrate at calibrate_at_s into the input
   double calibrate_at_s = 0;
+  /// The calibration is an N-pose followed by the mounting motion (mocapctl calibrate mounting).
+  bool calibrate_mounting_motion = false;
   std::function<bool()> cancelled;               ///< polled now and then (signals)
   std::function<void(double)> progress;          ///< called about 10 times a second of work
   std::function<void(int64_t)> on_first_sample;  ///< the input's first sample time

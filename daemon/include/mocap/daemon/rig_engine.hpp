@@ -36,7 +36,7 @@ class RigEngine final : public PoseEngine {
     return tracker_.sensor_health(sensor_index);
   }
   CalibrationProgress calibration_progress() const override;
-  void calibrate(CalibrationPose pose) override;
+  void calibrate(CalibrationPose pose, bool mounting_motion) override;
   void reset_heading() override;
 
   /// The outcome of the last calibration capture ("" while none finished).
