@@ -135,12 +135,12 @@ bool measure(const RigOptions& ro, double seconds, Measured& m, std::string& err
         if (have == buf.size()) have = 0;  // a line longer than 1 MB: drop it
       }
     });
-    // Writer: sensor i at t0 + k/rate + i/(rate*N), device time continuing 1 s after the
-    // warm-up's (so no measured sample shows a warm-up sample's device time).
+    // Writer: sensor i at t0 + k/rate + i/(rate*N), device time continuing after the warm-up's
+    // (so no measured sample shows a warm-up sample's device time).
     const int64_t period_ns = static_cast<int64_t>(1e9 / rate);
     const int64_t spacing_ns = period_ns / sensors;
     const int64_t periods = static_cast<int64_t>(seconds * rate);
-    const int64_t t_device0 = rig.last_device_ns() + 1'000'000'000;
+    const int64_t t_device0 = rig.last_device_ns() + period_ns;
     struct Write {
       int64_t t_ns;
       uint64_t key;

@@ -20,9 +20,12 @@ struct RigOptions {
   bool publish_every_sample = false;
   double frame_rate_hz = 120;
   int realtime_priority = 0;  ///< mocapd's pipeline.realtime_priority
-  /// "witmotion" (a pty each) or "slimevr" (a UDP board each, one sensor per board, talking to
-  /// mocapd's SlimeVR port: handshake, then one rotation datagram per sample).
+  /// "witmotion" (a pty each), "slimevr" (a UDP board each, one sensor per board, talking to
+  /// mocapd's SlimeVR port: handshake, then one rotation datagram per sample) or "line-udp"
+  /// (the DIY line protocol, one datagram per sample to a UDP port of its own per sensor).
   std::string protocol = "witmotion";
+  /// mocapd's pipeline.read_batch_ms; < 0: its default.
+  double read_batch_ms = -1;
 };
 
 /// N ptys with a WitMotion encoder each (or N SlimeVR boards), and a mocapd reading them.
@@ -52,10 +55,13 @@ class DaemonRig {
   /// Stops mocapd (SIGTERM) and returns its exit status; idempotent.
   int stop();
   const std::string& log_path() const { return log_; }
+  /// The last lines of mocapd's log (its directory goes with the rig).
+  std::string log_tail() const;
 
  private:
   RigOptions opt_;
   std::vector<std::unique_ptr<PtyEndpoint>> ptys_;
+  std::vector<int> line_fds_;  ///< line-udp: each sensor's socket, connected to its port
   std::vector<std::unique_ptr<ProtocolEncoder>> enc_;
   struct SlimeBoard {
     int fd = -1;
@@ -65,6 +71,7 @@ class DaemonRig {
   std::vector<SlimeBoard> boards_;
   std::vector<uint8_t> bytes_, reply_;
   std::string dir_, ctl_, log_;
+  std::vector<int> udp_ports_;  ///< ports picked for the daemon (kept distinct)
   int port_ = 0;
   int64_t last_device_ns_ = 0;
   pid_t pid_ = -1;
