@@ -59,10 +59,11 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       q_source_(sensors_.size(), Eigen::Quaterniond::Identity()),
       prev_w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
       prev_w_t_ns_(sensors_.size(), 0),
-      local_field_fixes_seen_(sensors_.size(), 0) {}
+      local_field_fixes_seen_(sensors_.size(), 0),
+      last_output_(sensors_.size(), AttitudeFilter(opt_.filter).output()) {}
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
-  return q_earth_sensor(i, filters_[static_cast<size_t>(i)].output());
+  return q_earth_sensor(i, last_output_[static_cast<size_t>(i)]);
 }
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i, const FilterOutput& o) const {
@@ -72,7 +73,7 @@ Eigen::Quaterniond BodyTracker::q_earth_sensor(int i, const FilterOutput& o) con
 
 SensorHealth BodyTracker::sensor_health(int i) const {
   if (i < 0 || i >= sensor_count()) return SensorHealth{};
-  return sensor_health(i, filters_[static_cast<size_t>(i)].output());
+  return sensor_health(i, last_output_[static_cast<size_t>(i)]);
 }
 
 SensorHealth BodyTracker::sensor_health(int i, const FilterOutput& o) const {
@@ -90,25 +91,38 @@ SensorHealth BodyTracker::sensor_health(int i, const FilterOutput& o) const {
 
 void BodyTracker::on_sample(int i, const ImuSample& in) {
   if (i < 0 || i >= sensor_count()) return;
-  const TrackerSensor& sensor = sensors_[static_cast<size_t>(i)];
-  AttitudeFilter& f = filters_[static_cast<size_t>(i)];
+  track_sample(i, in, filter_sample(i, in));
+}
+
+ImuSample BodyTracker::prepared(int i, const ImuSample& in) const {
   // 1. Gyro scale (1 when uncalibrated); a 6D rig ignores any magnetometer.
   ImuSample s = in;
-  if (s.has(kFieldMag)) has_mag_[static_cast<size_t>(i)] = true;
-  s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(sensor.gyr_scale);
+  s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(sensors_[static_cast<size_t>(i)].gyr_scale);
   if (!opt_.use_mag) s.valid = static_cast<uint8_t>(s.valid & ~kFieldMag);
+  return s;
+}
+
+FilterOutput BodyTracker::filter_sample(int i, const ImuSample& in) {
+  AttitudeFilter& f = filters_[static_cast<size_t>(i)];
   // 2. Filter; an orientation source (a tracker running its own filter, sending its
-  //    orientation without rates: kFieldQuat and no gyro) stands in for it.
+  //    orientation without rates: kFieldQuat and no gyro) stands in for it (track_sample).
+  if (!(in.has(kFieldQuat) && !in.has(kFieldGyr))) f.update(prepared(i, in));
+  return f.output();
+}
+
+void BodyTracker::track_sample(int i, const ImuSample& in, const FilterOutput& o) {
+  if (i < 0 || i >= sensor_count()) return;
+  const TrackerSensor& sensor = sensors_[static_cast<size_t>(i)];
+  const ImuSample s = prepared(i, in);
+  if (in.has(kFieldMag)) has_mag_[static_cast<size_t>(i)] = true;
   if (s.has(kFieldQuat) && !s.has(kFieldGyr)) {
     q_source_[static_cast<size_t>(i)] = s.q_device_sensor;
     is_source_[static_cast<size_t>(i)] = true;
-  } else {
-    f.update(s);
   }
+  last_output_[static_cast<size_t>(i)] = o;
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
   const int seg = sensor.segment;
   if (seg < 0) return;
-  const FilterOutput o = f.output();
   if (o.local_field_fixes != local_field_fixes_seen_[static_cast<size_t>(i)]) {
     local_field_fixes_seen_[static_cast<size_t>(i)] = o.local_field_fixes;
     fix_mounting_after_local_field(seg, o.local_field_fix_rad);

@@ -61,6 +61,15 @@ class BodyTracker {
 
   /// One sample of sensor `i` (its index in the rig). Never allocates.
   void on_sample(int i, const ImuSample& sample);
+  /// on_sample in two steps, for a caller that runs the filters of different sensors on other
+  /// threads (offline replay: daemon/replay.cpp). filter_sample(i, s) is steps 1-2 for sensor
+  /// i alone: it touches nothing but sensor i's filter, so calls for different sensors may run
+  /// concurrently, also with track_sample of other samples; it returns the filter's output.
+  /// track_sample(i, s, o) is the rest with that output, in sample order on one thread.
+  /// on_sample(i, s) == track_sample(i, s, filter_sample(i, s)). Not while capturing(): the
+  /// capture's end hands suspected local fields to the filters (they must be in step).
+  FilterOutput filter_sample(int i, const ImuSample& sample);
+  void track_sample(int i, const ImuSample& sample, const FilterOutput& o);
   /// Starts a capture in `pose`; samples from t_start_ns on are averaged. The result is taken
   /// with take_calibration_result() after the sample that completes it.
   void start_calibration(CalibrationPose pose, int64_t t_start_ns);
@@ -147,6 +156,11 @@ class BodyTracker {
   void fix_mounting_after_local_field(int seg, double turn_rad);
   /// Per sensor: its filter's local-field fixes last seen.
   std::vector<uint32_t> local_field_fixes_seen_;
+  /// Per sensor: its filter's output after its newest sample taken (what sensor_health(i) and
+  /// q_earth_sensor(i) report; the filter itself may have run ahead, see filter_sample).
+  std::vector<FilterOutput> last_output_;
+  /// The sample as the filter takes it: gyro scale divided out, no field in a 6D rig.
+  ImuSample prepared(int i, const ImuSample& in) const;
 };
 
 /// The rig mapping (segment -> sensor index) of a sensor list.
