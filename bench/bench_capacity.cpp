@@ -115,17 +115,22 @@ bool measure(const CapacityOptions& o, double read_batch_ms, Run& run, std::stri
       err = "sensors not streaming within 30 s; mocapd said:\n" + r->log_tail();
       return false;
     }
-  timespec settle{0, 300'000'000};  // let the warm-up samples reach the pipelines
-  ::nanosleep(&settle, nullptr);
+  // The sensors keep talking (every 10 ms) while the warm-up's samples reach the pipelines;
+  // the count starts 12 ms after the last of them (read at once, drained by the 8.3 ms frame
+  // tick) and the run right after: no gap a device clock would take for lost samples.
+  int64_t last = 0;
+  for (const auto& r : rigs)
+    last = r->keep_alive(0.3 / static_cast<double>(rigs.size()));
+  const int64_t count_at = last + 12'000'000;
+  const timespec settle{static_cast<time_t>(count_at / 1'000'000'000),
+                        static_cast<long>(count_at % 1'000'000'000)};
+  ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &settle, nullptr);
   run.c0 = all_counts(rigs);
   const double cpu0 = all_cpu_s(rigs);
   const double sim_cpu0 = thread_cpu_s();
-  // Writer: every 1 ms tick writes every sample that fell due (rate may exceed 1 kHz), the
-  // device time continuing each rig's warm-up.
+  // Writer: every 1 ms tick writes every sample that fell due (rate may exceed 1 kHz), each
+  // stamped with its rig's device clock at the time it fell due.
   const int64_t period_ns = static_cast<int64_t>(1e9 / o.rate_hz);
-  std::vector<int64_t> t_device0;
-  for (const auto& r : rigs)
-    t_device0.push_back(r->last_device_ns() + period_ns);
   const int64_t t0 = monotonic_ns();
   const int64_t end = t0 + static_cast<int64_t>(o.seconds * 1e9);
   int64_t next_sample = t0, k = 0, next_rss = t0 + 1'000'000'000;
@@ -136,11 +141,13 @@ bool measure(const CapacityOptions& o, double read_batch_ms, Run& run, std::stri
     ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
     const int64_t now = monotonic_ns();
     while (next_sample <= now && next_sample < end) {
-      for (size_t p = 0; p < rigs.size(); ++p)
+      for (size_t p = 0; p < rigs.size(); ++p) {
+        const int64_t t_device = rigs[p]->device_ns(next_sample);
         for (int i = 0; i < o.sensors; ++i) {
-          if (!rigs[p]->write_sample(i, t_device0[p] + k * period_ns)) ++run.short_writes;
+          if (!rigs[p]->write_sample(i, t_device)) ++run.short_writes;
           ++run.written;
         }
+      }
       ++k;
       next_sample = t0 + k * period_ns;
     }

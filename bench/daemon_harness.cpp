@@ -122,7 +122,7 @@ double status_field_mb(pid_t pid, const char* key) {
 
 }  // namespace
 
-DaemonRig::DaemonRig(const RigOptions& o) : opt_(o) {
+DaemonRig::DaemonRig(const RigOptions& o) : opt_(o), start_ns_(monotonic_ns()) {
   char tmpl[] = "/tmp/mocap-bench-XXXXXX";
   if (!::mkdtemp(tmpl)) throw std::runtime_error("mkdtemp failed");
   dir_ = tmpl;
@@ -205,7 +205,6 @@ int DaemonRig::stop() {
 }
 
 bool DaemonRig::write_sample(int i, int64_t t_device_ns, uint64_t* key) {
-  last_device_ns_ = std::max(last_device_ns_, t_device_ns);
   if (!boards_.empty()) {
     SlimeBoard& b = boards_[static_cast<size_t>(i)];
     const double ph = t_device_ns * 1e-9;
@@ -285,12 +284,12 @@ std::string DaemonRig::status() const {
 
 bool DaemonRig::wait_streaming(double timeout_s) {
   const int64_t end = monotonic_ns() + static_cast<int64_t>(timeout_s * 1e9);
-  int64_t t_dev = 0, last_host_ns = monotonic_ns();
+  int64_t last_host_ns = monotonic_ns();
   while (monotonic_ns() < end) {
     // Keep the sensors talking while the daemon opens and configures them.
+    const int64_t t_dev = device_ns(monotonic_ns());
     for (int i = 0; i < opt_.sensors; ++i)
       write_sample(i, t_dev);
-    t_dev += 10'000'000;
     if (answer_host() > 0) last_host_ns = monotonic_ns();
     const bool set_up = boards_.empty() ? monotonic_ns() - last_host_ns >= 300'000'000
                                         : std::all_of(boards_.begin(), boards_.end(),
@@ -313,6 +312,21 @@ std::string DaemonRig::log_tail() const {
   std::ifstream f(log_);
   std::string all((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   return all.size() > 2000 ? all.substr(all.size() - 2000) : all;
+}
+
+int64_t DaemonRig::keep_alive(double seconds) {
+  const int64_t start = monotonic_ns(), n = std::max<int64_t>(1, std::llround(seconds * 100));
+  int64_t due = start;
+  for (int64_t k = 0; k < n; ++k) {  // every 10 ms exactly, so the devices' period holds
+    due = start + k * 10'000'000;
+    const timespec ts{static_cast<time_t>(due / 1'000'000'000),
+                      static_cast<long>(due % 1'000'000'000)};
+    ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    for (int i = 0; i < opt_.sensors; ++i)
+      write_sample(i, device_ns(due));
+    answer_host();
+  }
+  return due;
 }
 
 double process_cpu_s(pid_t pid) {

@@ -201,7 +201,8 @@ void StreamDevice::run(SampleSink& sink) {
         }
         last_data_ns_ = t_ns;
         deliver(std::span(buf.data(), r.n), t_ns, sink);
-        if (spec_.read_batch_ns > 0) batch_wait(t_ns);
+        // A read that filled half the buffer is behind: no wait (read on at once).
+        if (spec_.read_batch_ns > 0 && r.n < buf.size() / 2) batch_wait(t_ns);
         break;
       case ReadResult::kVanished:
         lost(sink, r.reason);
