@@ -135,12 +135,11 @@ bool measure(const RigOptions& ro, double seconds, Measured& m, std::string& err
         if (have == buf.size()) have = 0;  // a line longer than 1 MB: drop it
       }
     });
-    // Writer: sensor i at t0 + k/rate + i/(rate*N), device time continuing 1 s after the
-    // warm-up's (so no measured sample shows a warm-up sample's device time).
+    // Writer: sensor i at t0 + k/rate + i/(rate*N), stamped with the device clock at t0 +
+    // k/rate (later than every warm-up sample's, so none shows a warm-up sample's time).
     const int64_t period_ns = static_cast<int64_t>(1e9 / rate);
     const int64_t spacing_ns = period_ns / sensors;
     const int64_t periods = static_cast<int64_t>(seconds * rate);
-    const int64_t t_device0 = rig.last_device_ns() + 1'000'000'000;
     struct Write {
       int64_t t_ns;
       uint64_t key;
@@ -149,7 +148,9 @@ bool measure(const RigOptions& ro, double seconds, Measured& m, std::string& err
     for (auto& w : writes)
       w.reserve(static_cast<size_t>(periods));
     uint64_t short_writes = 0;
-    const int64_t t0 = monotonic_ns() + 200'000'000;
+    rig.keep_alive(0.2);  // the client is connected; the sensors keep talking meanwhile
+    const int64_t t0 = monotonic_ns() + period_ns;
+    const int64_t t_device0 = rig.device_ns(t0);
     for (int64_t k = 0; k < periods; ++k) {
       for (int i = 0; i < sensors; ++i) {
         const int64_t due = t0 + k * period_ns + i * spacing_ns;

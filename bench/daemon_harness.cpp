@@ -31,19 +31,59 @@ namespace mocap::bench {
 
 namespace {
 
+/// n distinct free loopback ports (held open together while picked, so none repeats).
+std::vector<int> free_ports(int type, int n) {
+  std::vector<int> fds, ports;
+  for (int i = 0; i < n; ++i) {
+    const int fd = ::socket(AF_INET, type, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t len = sizeof a;
+    if (fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+        ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0)
+      ports.push_back(ntohs(a.sin_port));
+    if (fd >= 0) fds.push_back(fd);
+  }
+  for (const int fd : fds)
+    ::close(fd);
+  if (static_cast<int>(ports.size()) != n)
+    throw std::runtime_error("cannot find a free loopback port");
+  return ports;
+}
+
 int free_port(int type) {
-  const int fd = ::socket(AF_INET, type, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof a;
-  int port = 0;
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-      ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0)
-    port = ntohs(a.sin_port);
-  ::close(fd);
-  if (port == 0) throw std::runtime_error("cannot find a free loopback port");
-  return port;
+  return free_ports(type, 1).front();
+}
+
+/// n distinct free UDP loopback ports below the kernel's ephemeral range, where no socket the
+/// bench connects (those get ephemeral ports) can take one before mocapd binds it. Ports are
+/// handed out once per process, from a per-process start.
+std::vector<int> daemon_udp_ports(int n) {
+  int low = 32768;
+  if (std::ifstream r("/proc/sys/net/ipv4/ip_local_port_range"); r) r >> low;
+  static int next = 0;
+  if (next == 0) next = std::max(1024, low - 12000) + static_cast<int>(::getpid() % 4000);
+  std::vector<int> fds, ports;
+  while (static_cast<int>(ports.size()) < n && next < low) {
+    const int port = next++;
+    const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
+      ports.push_back(port);
+      fds.push_back(fd);
+    } else if (fd >= 0) {
+      ::close(fd);
+    }
+  }
+  for (const int fd : fds)
+    ::close(fd);
+  if (static_cast<int>(ports.size()) != n)
+    throw std::runtime_error("cannot find free UDP ports below the ephemeral range");
+  return ports;
 }
 
 /// The MAC of simulated SlimeVR board i.
@@ -82,23 +122,26 @@ double status_field_mb(pid_t pid, const char* key) {
 
 }  // namespace
 
-DaemonRig::DaemonRig(const RigOptions& o) : opt_(o) {
+DaemonRig::DaemonRig(const RigOptions& o) : opt_(o), start_ns_(monotonic_ns()) {
   char tmpl[] = "/tmp/mocap-bench-XXXXXX";
   if (!::mkdtemp(tmpl)) throw std::runtime_error("mkdtemp failed");
   dir_ = tmpl;
   ctl_ = dir_ + "/ctl.sock";
   log_ = dir_ + "/mocapd.log";
   port_ = free_port(SOCK_STREAM);
-  const bool slime = opt_.protocol == "slimevr";
-  if (!slime && opt_.protocol != "witmotion")
-    throw std::runtime_error("protocol " + opt_.protocol + ": the harness has witmotion, slimevr");
-  const int udp_port = slime ? free_port(SOCK_DGRAM) : 0;
+  const bool slime = opt_.protocol == "slimevr", line_udp = opt_.protocol == "line-udp";
+  if (!slime && !line_udp && opt_.protocol != "witmotion")
+    throw std::runtime_error("protocol " + opt_.protocol +
+                             ": the harness has witmotion, slimevr, line-udp");
+  const int udp_port = slime ? daemon_udp_ports(1).front() : 0;
+  if (line_udp) udp_ports_ = daemon_udp_ports(opt_.sensors);
   std::ostringstream cfg;
   cfg << "[daemon]\nlog_level = \"warn\"\ncontrol_socket = \"" << ctl_ << "\"\n"
       << "[pipeline]\nrate_hz = " << opt_.frame_rate_hz
       << "\npublish_every_sample = " << (opt_.publish_every_sample ? "true" : "false")
-      << "\nrealtime_priority = " << opt_.realtime_priority << "\n"
-      << "[outputs.json]\nenabled = true\nport = " << port_ << "\n"
+      << "\nrealtime_priority = " << opt_.realtime_priority << "\n";
+  if (opt_.read_batch_ms >= 0) cfg << "read_batch_ms = " << opt_.read_batch_ms << "\n";
+  cfg << "[outputs.json]\nenabled = true\nport = " << port_ << "\n"
       << "[outputs.posture]\nenabled = false\n";
   EncoderOptions eo;
   eo.rate_hz = opt_.rate_hz;
@@ -109,6 +152,12 @@ DaemonRig::DaemonRig(const RigOptions& o) : opt_(o) {
           << "\"\ndriver = \"slimevr\"\nport = \"udp:127.0.0.1:" << udp_port
           << "\"\noptions = { mac = \"" << slimevr::mac_string(board_mac(i))
           << "\", tracker = 0 }\n";
+    } else if (line_udp) {
+      const int port = udp_ports_[static_cast<size_t>(i)];
+      line_fds_.push_back(board_socket(port));
+      enc_.push_back(make_encoder("line", eo));
+      cfg << "[[sensor]]\nname = \"s" << i
+          << "\"\ndriver = \"line\"\nport = \"udp:127.0.0.1:" << port << "\"\n";
     } else {
       ptys_.push_back(std::make_unique<PtyEndpoint>());
       enc_.push_back(make_encoder("witmotion", eo));
@@ -138,6 +187,8 @@ DaemonRig::~DaemonRig() {
   stop();
   for (const auto& b : boards_)
     ::close(b.fd);
+  for (const int fd : line_fds_)
+    ::close(fd);
   std::error_code ec;
   std::filesystem::remove_all(dir_, ec);
 }
@@ -154,7 +205,6 @@ int DaemonRig::stop() {
 }
 
 bool DaemonRig::write_sample(int i, int64_t t_device_ns, uint64_t* key) {
-  last_device_ns_ = std::max(last_device_ns_, t_device_ns);
   if (!boards_.empty()) {
     SlimeBoard& b = boards_[static_cast<size_t>(i)];
     const double ph = t_device_ns * 1e-9;
@@ -179,6 +229,9 @@ bool DaemonRig::write_sample(int i, int64_t t_device_ns, uint64_t* key) {
   bytes_.clear();
   enc_[i]->encode(s, bytes_);
   if (key) *key = static_cast<uint64_t>(t_device_ns / 1'000'000 * 1'000'000);
+  if (!line_fds_.empty())
+    return ::send(line_fds_[static_cast<size_t>(i)], bytes_.data(), bytes_.size(), MSG_DONTWAIT) ==
+           static_cast<ssize_t>(bytes_.size());
   return ptys_[i]->write(bytes_);
 }
 
@@ -231,12 +284,12 @@ std::string DaemonRig::status() const {
 
 bool DaemonRig::wait_streaming(double timeout_s) {
   const int64_t end = monotonic_ns() + static_cast<int64_t>(timeout_s * 1e9);
-  int64_t t_dev = 0, last_host_ns = monotonic_ns();
+  int64_t last_host_ns = monotonic_ns();
   while (monotonic_ns() < end) {
     // Keep the sensors talking while the daemon opens and configures them.
+    const int64_t t_dev = device_ns(monotonic_ns());
     for (int i = 0; i < opt_.sensors; ++i)
       write_sample(i, t_dev);
-    t_dev += 10'000'000;
     if (answer_host() > 0) last_host_ns = monotonic_ns();
     const bool set_up = boards_.empty() ? monotonic_ns() - last_host_ns >= 300'000'000
                                         : std::all_of(boards_.begin(), boards_.end(),
@@ -253,6 +306,27 @@ bool DaemonRig::wait_streaming(double timeout_s) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   return false;
+}
+
+std::string DaemonRig::log_tail() const {
+  std::ifstream f(log_);
+  std::string all((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  return all.size() > 2000 ? all.substr(all.size() - 2000) : all;
+}
+
+int64_t DaemonRig::keep_alive(double seconds) {
+  const int64_t start = monotonic_ns(), n = std::max<int64_t>(1, std::llround(seconds * 100));
+  int64_t due = start;
+  for (int64_t k = 0; k < n; ++k) {  // every 10 ms exactly, so the devices' period holds
+    due = start + k * 10'000'000;
+    const timespec ts{static_cast<time_t>(due / 1'000'000'000),
+                      static_cast<long>(due % 1'000'000'000)};
+    ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    for (int i = 0; i < opt_.sensors; ++i)
+      write_sample(i, device_ns(due));
+    answer_host();
+  }
+  return due;
 }
 
 double process_cpu_s(pid_t pid) {

@@ -10,7 +10,7 @@ build_pkgs=(build-essential cmake ninja-build pkg-config git
   libeigen3-dev libserialport-dev libhidapi-dev libusb-1.0-0-dev
   libglfw3-dev libgl-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libtomlplusplus-dev
   nlohmann-json3-dev
-  zlib1g-dev libzstd-dev libpng-dev libcli11-dev xvfb xauth)
+  zlib1g-dev libzstd-dev libdeflate-dev libpng-dev libcli11-dev xvfb xauth)
 test_pkgs=(libgtest-dev libgmock-dev libbenchmark-dev clang-14 libclang-rt-14-dev
   libfuzzer-14-dev liblo-tools socat python3 blender python3-numpy xdotool)
 

@@ -102,6 +102,17 @@ const Section<PipelineConfig>& section() {
                "normal scheduling); keeps latency low while other programs load the CPU. Needs "
                "root, `CAP_SYS_NICE` or `LimitRTPRIO=` (see config/mocapd.service); if refused, a "
                "warning and normal scheduling"},
+      {.name = "read_batch_ms",
+       .at = AT(read_batch_ms),
+       .lo = 0,
+       .hi = 50,
+       .unit = "ms",
+       .help = "a device reader whose samples carry the device's own clock waits this long after "
+               "a read before the next, so fast sensors are read in batches (a 1 kHz sensor: 250 "
+               "reads/s instead of 1000); sensors slower than 1/this are read sample by sample "
+               "anyway, and their samples' times come from the device, so only faster sensors' "
+               "samples reach the frames up to this much later. 0 = read every sample at once; "
+               "not used with publish_every_sample"},
   };
   static const Section<S> s{"pipeline", "", k};
   return s;

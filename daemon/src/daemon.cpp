@@ -65,6 +65,9 @@ DeviceSpec device_spec(const Config& cfg, size_t i) {
   d.axis_remap = s.axis_remap;
   d.options = s.options;
   d.realtime_priority = cfg.pipeline.realtime_priority;
+  d.read_batch_ns = cfg.pipeline.publish_every_sample
+                        ? 0
+                        : static_cast<int64_t>(cfg.pipeline.read_batch_ms * 1e6);
   if (shared_port_driver(s.driver) && device_leader(cfg, i) == i) {
     // One socket for every tracker on this port: MAC/SENSOR=INDEX for each member.
     // (A lone sensor keeps its own options.mac/tracker, whose errors name those keys.)

@@ -36,10 +36,26 @@ void PipelineCore::remove_sink(FrameSink* sink) {
   sinks_.erase(std::remove(sinks_.begin(), sinks_.end(), sink), sinks_.end());
 }
 
+bool PipelineCore::accepts(const ImuSample& s) const {
+  return s.sensor_id < sensors_.size() && finite_sample(s);
+}
+
 void PipelineCore::process(const ImuSample& s) {
-  if (s.sensor_id >= sensors_.size() || !finite_sample(s)) {
+  if (!take(s)) return;
+  engine_.on_sample(s.sensor_id, s);
+  taken(s);
+}
+
+void PipelineCore::process(const ImuSample& s, const FilterOutput& o) {
+  if (!take(s)) return;
+  engine_.on_prefiltered(s.sensor_id, s, o);
+  taken(s);
+}
+
+bool PipelineCore::take(const ImuSample& s) {
+  if (!accepts(s)) {
     ++rejected_;  // NaN never reaches a pose; unknown sensors are ignored
-    return;
+    return false;
   }
   const int i = s.sensor_id;
   Health& h = health_[i];
@@ -64,7 +80,10 @@ void PipelineCore::process(const ImuSample& s) {
     h.live = true;
     engine_.set_sensor_live(i, true);
   }
-  engine_.on_sample(i, s);
+  return true;
+}
+
+void PipelineCore::taken(const ImuSample& s) {
   ++samples_;
   if (cfg_.publish_every_sample) publish_frame(s.t_host_ns);
 }

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <string_view>
 
+#include "mocap/core/fixed_chars.hpp"
 #include "mocap/daemon/json_stream.hpp"
 
 namespace mocap::daemon {
@@ -57,7 +58,7 @@ class LineOut {
   }
   void num(double v, int decimals) {
     if (!std::isfinite(v)) return put("null");
-    auto r = std::to_chars(p_, end_, v, std::chars_format::fixed, decimals);
+    auto r = to_chars_fixed(p_, end_, v, decimals);
     if (r.ec != std::errc()) {
       ok_ = false;
       p_ = end_;

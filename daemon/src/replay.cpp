@@ -239,6 +239,8 @@ std::unique_ptr<SampleSource> open_sample_source(const std::string& path, const 
 }
 
 ReplayResult run_replay(SampleSource& src, PipelineCore& core, const ReplayOptions& opt) {
+  if (opt.filter_threads > 0 && opt.speed <= 0 && core.engine().prefilter_allowed())
+    return run_replay_parallel(src, core, opt);
   ReplayResult r;
   ImuSample s;
   bool first = true, calibration_pending = opt.calibrate_pose.has_value();

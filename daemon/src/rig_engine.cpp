@@ -57,6 +57,20 @@ void RigEngine::flush_calibration_file() {
 
 void RigEngine::on_sample(int i, const ImuSample& s) {
   tracker_.on_sample(i, s);
+  after_sample(s);
+}
+
+FilterOutput RigEngine::prefilter(int i, const ImuSample& s) {
+  if (i < 0 || i >= tracker_.sensor_count()) return {};
+  return tracker_.filter_sample(i, s);
+}
+
+void RigEngine::on_prefiltered(int i, const ImuSample& s, const FilterOutput& o) {
+  tracker_.track_sample(i, s, o);
+  after_sample(s);
+}
+
+void RigEngine::after_sample(const ImuSample& s) {
   if (auto r = tracker_.take_calibration_result()) {
     calib_message_ = r->message;
     if (r->ok()) {

@@ -56,7 +56,9 @@ void DecoderCommon::emit(ImuSample& s, int64_t t_device_ns, int64_t t_read_ns, i
     stats.dropped_samples += static_cast<uint64_t>(dropped);
   }
   seq_ += static_cast<uint32_t>(dropped > 0 ? dropped : 0);
+  const uint64_t before = stats.samples;
   finish(s, sink);
+  stats.timed_samples += stats.samples - before;
 }
 
 void DecoderCommon::emit_untimed(ImuSample& s, int64_t t_read_ns, SampleSink& sink) {

@@ -32,6 +32,9 @@ class StreamDevice final : public Device {
   bool try_open(SampleSink& sink);
   void lost(SampleSink& sink, const std::string& reason);
   void deliver(std::span<const uint8_t> bytes, int64_t t_ns, SampleSink& sink);
+  /// DeviceSpec::read_batch_ns: after a read of device-timed samples, waits until that long
+  /// after it (or a stop request).
+  void batch_wait(int64_t t_read_ns);
   void begin_step(SampleSink& sink);
   int step_poll(SampleSink& sink);  ///< advances set-up; returns the read timeout to use
 
@@ -52,6 +55,9 @@ class StreamDevice final : public Device {
   int64_t step_deadline_ns_ = 0;
   uint64_t step_baseline_ = 0;
   int64_t last_data_ns_ = 0;
+  bool timed_read_ = false;      ///< the last read's samples all carried the device's time
+  int64_t last_read_ns_ = 0;     ///< the last read that gave samples
+  double sample_period_ns_ = 0;  ///< time per sample between reads, smoothed
   bool silent_ = false, ever_opened_ = false;
   std::string last_open_error_;
 

@@ -49,7 +49,13 @@ double AttitudeFilter::mag_latency_s() const {
 // heading.
 [[gnu::flatten]] void AttitudeFilter::update_mag(const Eigen::Vector3d& mag_raw, double dt_s) {
   const Eigen::Quaterniond q6 = st_.inclination.q_acc * st_.strapdown.q_gyr;
-  if (p_.hard_iron.tau_s > 0) update_hard_iron(mag_raw, q6, dt_s);
+  if (p_.hard_iron.tau_s > 0) {
+    // The estimator runs every hard_iron.decim field samples (out of line, like every rare
+    // step): in between only its clock advances.
+    HardIronState& h = st_.hard_iron;
+    h.dt_s += dt_s > 0 ? dt_s : c_.ts.mag_s;
+    if (++h.n >= c_.hard_iron.decim) update_hard_iron(mag_raw, q6);
+  }
   const Eigen::Vector3d mag = mag_raw - st_.hard_iron.applied_uT;
   const Eigen::Vector3d m_e = mag_to_earth(mag, q6);
   if (st_.upset.checking) upset_mag(mag);  // nothing to do while nothing was clipped
@@ -59,11 +65,9 @@ double AttitudeFilter::mag_latency_s() const {
 
 // Hard-iron estimator (decimated to hard_iron.step_s), fed with the latency-compensated raw
 // field; then the choice of the offset subtracted.
-void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag_raw, const Eigen::Quaterniond& q6,
-                                      double dt_s) {
+void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag_raw,
+                                      const Eigen::Quaterniond& q6) {
   HardIronState& h = st_.hard_iron;
-  h.dt_s += dt_s > 0 ? dt_s : c_.ts.mag_s;
-  if (++h.n < c_.hard_iron.decim) return;
   const double lat_s = mag_latency_s();
   const Eigen::Vector3d w = st_.strapdown.last_gyr_rad_s - st_.bias.rad_s;
   const Eigen::Vector3d m_c = mag_raw - lat_s * w.cross(mag_raw - h.est.used_uT);

@@ -65,13 +65,14 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
                {index(Segment::thigh_r), index(Segment::shank_r), HingeAxisEstimator(1)},
                {index(Segment::upper_arm_l), index(Segment::forearm_l), HingeAxisEstimator(-1)},
                {index(Segment::upper_arm_r), index(Segment::forearm_r), HingeAxisEstimator(-1)}}},
-      w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()) {
+      w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
+      last_output_(sensors_.size(), AttitudeFilter(opt_.filter).output()) {
   opt_.calibration = calibration_setup(sensors_, opt_);
   align_revision_seen_ = align_.revision();
 }
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i) const {
-  return q_earth_sensor(i, filters_[static_cast<size_t>(i)].output());
+  return q_earth_sensor(i, last_output_[static_cast<size_t>(i)]);
 }
 
 Eigen::Quaterniond BodyTracker::q_earth_sensor(int i, const FilterOutput& o) const {
@@ -83,7 +84,7 @@ Eigen::Quaterniond BodyTracker::q_earth_sensor(int i, const FilterOutput& o) con
 
 SensorHealth BodyTracker::sensor_health(int i) const {
   if (i < 0 || i >= sensor_count()) return SensorHealth{};
-  return sensor_health(i, filters_[static_cast<size_t>(i)].output());
+  return sensor_health(i, last_output_[static_cast<size_t>(i)]);
 }
 
 SensorHealth BodyTracker::sensor_health(int i, const FilterOutput& o) const {
@@ -100,29 +101,42 @@ SensorHealth BodyTracker::sensor_health(int i, const FilterOutput& o) const {
 
 void BodyTracker::on_sample(int i, const ImuSample& in) {
   if (i < 0 || i >= sensor_count()) return;
-  const size_t k = static_cast<size_t>(i);
-  const TrackerSensor& sensor = sensors_[k];
-  AttitudeFilter& f = filters_[k];
+  track_sample(i, in, filter_sample(i, in));
+}
+
+ImuSample BodyTracker::prepared(int i, const ImuSample& in) const {
   // 1. Gyro scale (1 when uncalibrated); a 6D rig ignores any magnetometer.
   ImuSample s = in;
-  if (s.has(kFieldMag)) has_mag_[k] = true;
-  s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(sensor.gyr_scale);
+  s.gyr_rad_s = s.gyr_rad_s.cwiseQuotient(sensors_[static_cast<size_t>(i)].gyr_scale);
   if (!opt_.use_mag) s.valid = static_cast<uint8_t>(s.valid & ~kFieldMag);
+  return s;
+}
+
+FilterOutput BodyTracker::filter_sample(int i, const ImuSample& in) {
+  AttitudeFilter& f = filters_[static_cast<size_t>(i)];
   // 2. Filter; an orientation source (a tracker running its own filter, sending its
-  //    orientation without rates: kFieldQuat and no gyro) stands in for it.
+  //    orientation without rates: kFieldQuat and no gyro) stands in for it (track_sample).
+  if (!(in.has(kFieldQuat) && !in.has(kFieldGyr))) f.update(prepared(i, in));
+  return f.output();
+}
+
+void BodyTracker::track_sample(int i, const ImuSample& in, const FilterOutput& o) {
+  if (i < 0 || i >= sensor_count()) return;
+  const size_t k = static_cast<size_t>(i);
+  const TrackerSensor& sensor = sensors_[k];
+  const ImuSample s = prepared(i, in);
+  if (in.has(kFieldMag)) has_mag_[k] = true;
   if (s.has(kFieldQuat) && !s.has(kFieldGyr)) {
     q_source_[k] = s.q_device_sensor;
     is_source_[k] = true;
-  } else {
-    f.update(s);
   }
+  last_output_[k] = o;
   newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
   const double dt_s =
       prev_t_ns_[k] != 0 ? static_cast<double>(s.t_host_ns - prev_t_ns_[k]) * 1e-9 : 0.0;
   prev_t_ns_[k] = s.t_host_ns;
   const int seg = sensor.segment;
   if (seg < 0) return;
-  const FilterOutput o = f.output();
   // 3. The sensor's orientation as its segment uses it; a watched local field may turn the
   //    mounting once it turns.
   LocalFieldWatch& watch = field_watch_[k];
@@ -467,7 +481,7 @@ void BodyTracker::suspect_local_fields(const CalibrationResult& r) {
     const int sg = sensors_[k].segment;
     if (sg < 0 || !has_mag_[k] || r.heading_off_normal_rad[sg] == 0) continue;
     if (std::abs(norm[sg] - median) > norm_th * median) continue;
-    field_watch_[k].suspect(-r.heading_off_normal_rad[sg], filters_[k].output(), norm_th);
+    field_watch_[k].suspect(-r.heading_off_normal_rad[sg], last_output_[k], norm_th);
   }
 }
 

@@ -2,13 +2,12 @@
 // (docs/session-format.md). Every field is written one by one, never memcpy of a struct.
 #include "mocap/session/format.hpp"
 
-#include <zlib.h>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <type_traits>
+#include "block_crc.hpp"
 
 namespace mocap::session {
 namespace {
@@ -193,7 +192,7 @@ bool encode_file_header(const SessionHeader& h, std::vector<uint8_t>& out, std::
     w.u8(0);
     w.u16(s.device_index);
   }
-  const auto crc = crc32(0L, out.data(), static_cast<uInt>(out.size() - 4));
+  const auto crc = session::block_crc(0, out.data(), static_cast<std::size_t>(out.size() - 4));
   w.u32(static_cast<uint32_t>(crc));
   return true;
 }
@@ -321,7 +320,8 @@ void encode_header_copy_blocks(std::span<const uint8_t> file_header, std::vector
     put_u32(p + kBlockHeaderBytes + 4, static_cast<uint32_t>(off));
     std::memcpy(p + kBlockHeaderBytes + kHeaderCopyPrefixBytes, file_header.data() + off, n);
     const std::size_t body = kBlockHeaderBytes + kHeaderCopyPrefixBytes + n;
-    put_u32(p + body, static_cast<uint32_t>(crc32(0L, p, static_cast<uInt>(body))));
+    put_u32(p + body,
+            static_cast<uint32_t>(session::block_crc(0, p, static_cast<std::size_t>(body))));
   }
 }
 

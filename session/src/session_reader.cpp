@@ -5,7 +5,6 @@
 #include "mocap/session/session_reader.hpp"
 
 #include <sys/stat.h>
-#include <zlib.h>
 #include <zstd.h>
 
 #include <algorithm>
@@ -13,6 +12,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include "block_crc.hpp"
 
 namespace mocap {
 
@@ -66,7 +66,7 @@ bool parse_file_header(const std::function<std::size_t(uint64_t, uint8_t*, std::
     msg = "session header truncated";
     return false;
   }
-  const auto crc = crc32(0L, buf.data(), static_cast<uInt>(buf.size() - 4));
+  const auto crc = session::block_crc(0, buf.data(), static_cast<std::size_t>(buf.size() - 4));
   if (static_cast<uint32_t>(crc) != get_u32(buf.data() + buf.size() - 4)) {
     msg = "session header checksum mismatch (file damaged)";
     return false;
@@ -107,6 +107,10 @@ bool SessionReader::open(const std::string& path, std::string* error) {
     if (error) *error = "cannot open session file '" + path + "': " + std::strerror(errno);
     return false;
   }
+  // Reading ahead in 1 MiB blocks instead of stdio's 4 KiB: a long replay reads hundreds of
+  // megabytes, a block of ~140 bytes at a time.
+  file_buffer_.resize(1 << 20);
+  std::setvbuf(file_, file_buffer_.data(), _IOFBF, file_buffer_.size());
   struct stat st {};
   size_ = ::fstat(fileno(file_), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0;
   return read_header("'" + path + "'", error);
@@ -177,7 +181,7 @@ bool SessionReader::primary_crc_ok() {
   if (len > kMaxHeaderBytes || len + 24ull > size_) return false;
   std::vector<uint8_t> buf(sizeof fixed + len + 4);
   if (read_at(0, buf.data(), buf.size()) != buf.size()) return false;
-  const auto crc = crc32(0L, buf.data(), static_cast<uInt>(buf.size() - 4));
+  const auto crc = session::block_crc(0, buf.data(), static_cast<std::size_t>(buf.size() - 4));
   return static_cast<uint32_t>(crc) == get_u32(buf.data() + buf.size() - 4);
 }
 
@@ -302,8 +306,8 @@ SessionReader::Parse SessionReader::parse_at(uint64_t at, Block& block, uint64_t
         "last block truncated (" + std::to_string(have) + " of " + std::to_string(want) + " bytes)";
     return Parse::bad;
   }
-  uLong crc = crc32(0L, hdr, sizeof hdr);
-  crc = crc32(crc, payload_.data(), len);
+  uint32_t crc = session::block_crc(0, hdr, sizeof hdr);
+  crc = session::block_crc(crc, payload_.data(), len);
   block_end = at + sizeof hdr + want;
   if (static_cast<uint32_t>(crc) != get_u32(payload_.data() + len)) {
     end_kind = block_end == size_ ? End::torn : End::corrupt;
@@ -384,7 +388,7 @@ SessionReader::Parse SessionReader::next_inner(Block& block) {
   const uint32_t len = get_u32(p + 4);
   if (len > kMaxBlockPayload || kBlockHeaderBytes + len + kBlockTrailerBytes > left)
     return Parse::bad;
-  const uLong crc = crc32(0L, p, static_cast<uInt>(kBlockHeaderBytes + len));
+  const uint32_t crc = session::block_crc(0, p, static_cast<std::size_t>(kBlockHeaderBytes + len));
   if (static_cast<uint32_t>(crc) != get_u32(p + kBlockHeaderBytes + len)) return Parse::bad;
   block.offset = group_offset_;
   block.inner = static_cast<uint32_t>(group_pos_ + 1);

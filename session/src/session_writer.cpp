@@ -9,13 +9,13 @@
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
-#include <zlib.h>
 #include <zstd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include "block_crc.hpp"
 
 namespace mocap {
 namespace {
@@ -167,9 +167,9 @@ bool SessionWriter::append_block(session::BlockType type, const uint8_t* prefix,
   const std::size_t payload_len = prefix_len + body_len;
   uint8_t head[session::kBlockHeaderBytes];
   session::encode_block_header(type, static_cast<uint32_t>(payload_len), head);
-  uLong crc = crc32(0L, head, sizeof head);
-  if (prefix_len) crc = crc32(crc, prefix, static_cast<uInt>(prefix_len));
-  if (body_len) crc = crc32(crc, body, static_cast<uInt>(body_len));
+  uint32_t crc = session::block_crc(0, head, sizeof head);
+  if (prefix_len) crc = session::block_crc(crc, prefix, static_cast<std::size_t>(prefix_len));
+  if (body_len) crc = session::block_crc(crc, body, static_cast<std::size_t>(body_len));
   uint8_t tail[session::kBlockTrailerBytes];
   session::put_u32(tail, static_cast<uint32_t>(crc));
   std::lock_guard lock(mutex_);
@@ -216,8 +216,8 @@ void SessionWriter::maybe_append_clock(int64_t now_host_ns) {
   session::put_u64(payload + 8, static_cast<uint64_t>(unix_ns));
   uint8_t head[session::kBlockHeaderBytes];
   session::encode_block_header(session::BlockType::clock, sizeof payload, head);
-  uLong crc = crc32(0L, head, sizeof head);
-  crc = crc32(crc, payload, sizeof payload);
+  uint32_t crc = session::block_crc(0, head, sizeof head);
+  crc = session::block_crc(crc, payload, sizeof payload);
   uint8_t tail[session::kBlockTrailerBytes];
   session::put_u32(tail, static_cast<uint32_t>(crc));
   if (push_locked(head, nullptr, 0, payload, sizeof payload, tail, false)) {
@@ -288,7 +288,8 @@ SessionWriter::Round SessionWriter::write_compressed(std::size_t pos, std::size_
       const auto payload_len = static_cast<uint32_t>(session::kCompressedPrefixBytes + c);
       session::encode_block_header(session::BlockType::compressed, payload_len, packed_.get());
       session::put_u32(packed_.get() + session::kBlockHeaderBytes, static_cast<uint32_t>(run));
-      const uLong crc = crc32(0L, packed_.get(), session::kBlockHeaderBytes + payload_len);
+      const uint32_t crc =
+          session::block_crc(0, packed_.get(), session::kBlockHeaderBytes + payload_len);
       session::put_u32(packed_.get() + session::kBlockHeaderBytes + payload_len,
                        static_cast<uint32_t>(crc));
       out = packed_.get();

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "mocap/core/fixed_chars.hpp"
 #include "mocap/skeleton/bvh.hpp"
 #include "mocap/skeleton/quat_math.hpp"
 
@@ -107,14 +108,15 @@ void BvhWriter::write_frame(const PoseFrame& fr) {
   const Eigen::Quaterniond ci = c.conjugate();
   const auto& p = fr.p_earth_segment_m[0];
   const Eigen::Vector3d root = c * Eigen::Vector3d(p[0], p[1], p[2]) * opt_.units_per_m;
-  // One line per frame, formatted with std::to_chars (same digits as printf "%.Nf", several
-  // times faster, which dominates long offline exports) and written with a single fwrite.
+  // One line per frame, formatted with to_chars_fixed (std::to_chars' digits, the same as
+  // printf "%.Nf", several times faster: the numbers dominate long offline exports) and written
+  // with a single fwrite.
   char line[(kSegmentCount * 3 + 3) * 24 + 8];  // 51 values of at most 24 characters
   char* out = line;
   auto put = [&](double v, int precision, bool space) {
     if (space) *out++ = ' ';
     // A value too long for its 24-character share (|v| >= 1e15) is not a body pose.
-    const auto r = std::to_chars(out, out + 23, v, std::chars_format::fixed, precision);
+    const auto r = to_chars_fixed(out, out + 23, v, precision);
     if (r.ec != std::errc{}) throw std::runtime_error(path_ + ": value out of range for BVH");
     out = r.ptr;
   };

@@ -51,12 +51,31 @@ TEST(BenchDaemon, LatencySlimeVrRunsBothPaths) {
 TEST(BenchDaemon, CapacityCountsSamples) {
   const auto j = run_bench("capacity --sensors 3 --rate 100 --duration 1");
   EXPECT_EQ(j.at("benchmark"), "capacity");
-  const auto& s = j.at("samples");
-  EXPECT_EQ(s.at("written").get<int>(), 300);
-  EXPECT_GE(s.at("received").get<int>() + s.at("lost").get<int>(), 300);
+  for (const char* run : {"run", "baseline"}) {  // the baseline: the same load, read unbatched
+    const auto& r = j.at(run);
+    const auto& s = r.at("samples");
+    EXPECT_EQ(s.at("written").get<int>(), 300) << run;
+    EXPECT_GE(s.at("received").get<int>() + s.at("lost").get<int>(), 300) << run;
+    EXPECT_GT(s.at("received").get<int>(), 0) << run;
+    EXPECT_GT(r.at("daemon_rss_mb").at("max").get<double>(), 0.0) << run;
+    EXPECT_GE(r.at("daemon_cpu_pct_of_one_core").get<double>(), 0.0) << run;
+  }
+  EXPECT_EQ(j.at("baseline").at("read_batch_ms").get<double>(), 0.0);
+  EXPECT_TRUE(j.at("pass").is_boolean());
+}
+
+// Several performers (one mocapd each) over UDP with the line protocol: every sample counted.
+TEST(BenchDaemon, CapacityOfPerformersOverUdp) {
+  const auto j = run_bench(
+      "capacity --protocol line-udp --performers 2 --sensors 2 --rate 100 --duration 1 "
+      "--no-baseline");
+  EXPECT_EQ(j.at("params").at("sensors").get<int>(), 4);
+  EXPECT_TRUE(j.at("baseline").is_null());
+  const auto& s = j.at("run").at("samples");
+  EXPECT_EQ(s.at("written").get<int>(), 400);
+  EXPECT_GE(s.at("received").get<int>() + s.at("lost").get<int>(), 400);
   EXPECT_GT(s.at("received").get<int>(), 0);
-  EXPECT_GT(j.at("daemon_rss_mb").at("max").get<double>(), 0.0);
-  EXPECT_GE(j.at("daemon_cpu_pct_of_one_core").get<double>(), 0.0);
+  EXPECT_GE(j.at("run").at("daemon_cpu_us_per_sample").get<double>(), 0.0);
 }
 
 TEST(BenchDaemon, ReplayReplaysEverySample) {

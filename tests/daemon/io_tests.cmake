@@ -9,5 +9,5 @@ mocap_test(test_session_crash SOURCES test_session_crash.cpp LIBS mocap_daemon T
 mocap_test(test_vmc SOURCES test_vmc.cpp LIBS mocap_daemon TIMEOUT 60)
 mocap_test(test_vrchat SOURCES test_vrchat.cpp LIBS mocap_daemon TIMEOUT 60)
 mocap_test(test_session_export SOURCES test_session_export.cpp
-  LIBS mocap_daemon mocap_skeleton nlohmann_json::nlohmann_json TIMEOUT 60)
+  LIBS mocap_daemon mocap_skeleton nlohmann_json::nlohmann_json ZLIB::ZLIB TIMEOUT 60)
 add_dependencies(test_session_export mocap)

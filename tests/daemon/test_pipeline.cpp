@@ -152,7 +152,9 @@ TEST(PipelineCore, PerSampleFrameShowsTheSample) {
       const int seg = eng.segment[i];
       EXPECT_FLOAT_EQ(f.q_earth_segment[seg][0], static_cast<float>(eng.q[i].w()));
       EXPECT_FLOAT_EQ(f.q_earth_segment[seg][3], static_cast<float>(eng.q[i].z()));
-      if (before > 0) EXPECT_GT(f.t_ns, sink.frames[before - 1].t_ns);
+      if (before > 0) {
+        EXPECT_GT(f.t_ns, sink.frames[before - 1].t_ns);
+      }
     }
   }
   // Sensor 1 turned at 2 rad/s for 99 periods of 5 ms, and the last frame shows it all.

@@ -63,9 +63,24 @@ TEST(Witmotion, ConfiguredStreamDecodesTruth) {
     max_q = std::max(max_q, s.q_device_sensor.angularDistance(truth.q_device_sensor));
   }
   EXPECT_GE(complete, 298);
+  // With time packets every sample is timed by the device's clock (a reader may batch its reads).
+  EXPECT_EQ(dec->stats().timed_samples, dec->stats().samples);
   EXPECT_LT(max_gyr, 2000.0 / 32768 * kRadPerDeg);  // one LSB
   EXPECT_LT(max_acc, 16 * 9.80665 / 32768);
   EXPECT_LT(max_q, 1e-3);
+}
+
+// Without the time packet (the power-on output content) samples are stamped at read: none is
+// timed, so a reader never batches them (their times would bunch).
+TEST(Witmotion, UntimedStreamCountsNoTimedSamples) {
+  auto motion = make_motion("rotate");
+  auto enc = make_encoder("witmotion", {.rate_hz = 100});
+  const auto bytes = stream(*enc, *motion, 50, 10'000'000);
+  auto dec = make_decoder(DeviceSpec{.name = "w", .protocol = "witmotion"});
+  test::CollectSink sink;
+  dec->feed(bytes, 1'000'000, sink);
+  EXPECT_GE(dec->stats().samples, 48u);
+  EXPECT_EQ(dec->stats().timed_samples, 0u);
 }
 
 TEST(Witmotion, WritesNeedUnlockAndRegisterReadReplies) {

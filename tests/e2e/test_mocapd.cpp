@@ -169,13 +169,15 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
     EXPECT_GT(poses, 30) << f;
   }
 
-  // Offline replay is deterministic, from samples and from raw bytes through the decoders.
+  // Offline replay is deterministic, from samples and from raw bytes through the decoders, and
+  // the same with every filter on the replay's thread (--filter-threads 0) as with filters on
+  // other threads (the default).
   for (const char* source : {"samples", "raw"}) {
     const std::string p1 = (dir / (std::string(source) + "1.csv")).string();
     const std::string p2 = (dir / (std::string(source) + "2.csv")).string();
     // --poses: the deprecated spelling of --csv, still accepted.
     ASSERT_EQ(run({kBin + "mocap", "replay", (dir / "a.mocapses").string(), "--source", source,
-                   "--poses", p1, "--quiet"},
+                   "--poses", p1, "--quiet", "--filter-threads", "0"},
                   &out),
               0)
         << out;

@@ -4,15 +4,18 @@
 //                [--calibrate npose@SECONDS|tpose@SECONDS|mounting@SECONDS] [--source raw|samples]
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include "commands.hpp"
 #include "mocap/core/cli.hpp"
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/daemon.hpp"
+#include "mocap/daemon/frame_writer_thread.hpp"
 #include "mocap/daemon/poses_csv.hpp"
 #include "mocap/daemon/prefetch_source.hpp"
 #include "mocap/daemon/replay_run.hpp"
@@ -80,6 +83,7 @@ struct ReplayCommandOptions {
   std::string input, config, config_alias, bvh, csv, csv_alias, calibrate, source;
   std::vector<std::string> sets;
   bool quiet = false;
+  int filter_threads = -1;  ///< -1: one fewer than the cores (at least 1)
 };
 
 int run_replay(const ReplayCommandOptions& o) {
@@ -97,6 +101,9 @@ int run_replay(const ReplayCommandOptions& o) {
     }
   }
   ReplayOptions opt;
+  opt.filter_threads = o.filter_threads >= 0
+                           ? o.filter_threads
+                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
   if (!o.calibrate.empty()) {
     mocap::CalibrationPose pose;
     parse_calibrate(o.calibrate, pose, opt.calibrate_mounting_motion,
@@ -120,15 +127,19 @@ int run_replay(const ReplayCommandOptions& o) {
     const Config& cfg = run.cfg;
     RigEngine& engine = run.engine;
     PipelineCore& core = run.core;
+    // Each file is formatted and written on a thread of its own, frames in order.
     std::unique_ptr<BvhSink> bvh;
     std::unique_ptr<PosesCsvSink> poses;
+    std::unique_ptr<FrameWriterThread> bvh_thread, poses_thread;
     if (!o.bvh.empty()) {
       bvh = std::make_unique<BvhSink>(o.bvh, cfg);
-      core.add_sink(bvh.get());
+      bvh_thread = std::make_unique<FrameWriterThread>(*bvh);
+      core.add_sink(bvh_thread.get());
     }
     if (!csv_path.empty()) {
       poses = std::make_unique<PosesCsvSink>(csv_path, 0);
-      core.add_sink(poses.get());
+      poses_thread = std::make_unique<FrameWriterThread>(*poses);
+      core.add_sink(poses_thread.get());
     }
     const bool bar = !o.quiet && isatty(STDERR_FILENO);
     if (bar) {
@@ -145,8 +156,14 @@ int run_replay(const ReplayCommandOptions& o) {
     };
     const int64_t wall0 = monotonic_ns();
     const ReplayResult r = daemon::run_replay(*src, core, opt);
-    if (bvh) bvh->close();
-    if (poses) poses->close();
+    if (bvh) {
+      bvh_thread->finish();
+      bvh->close();
+    }
+    if (poses) {
+      poses_thread->finish();
+      poses->close();
+    }
     const double wall_s = (monotonic_ns() - wall0) * 1e-9;
     const bool calibrated = engine.skeleton().calibration().valid;
     std::vector<std::string> outputs;
@@ -192,6 +209,10 @@ void add_replay(CLI::App& app, int& exit_code) {
   cli::add_deprecated_alias(*c, "--rig", o->config_alias, config);
   cli::add_multi(*c, "--set", o->sets, "override a configuration key (KEY=VALUE)");
   c->add_option("--bvh", o->bvh, "write the motion as BVH");
+  c->add_option("--filter-threads", o->filter_threads,
+                "threads for the sensors' filters besides the replay's own (default: cores - 1, "
+                "at least 1; 0: all on one thread); the output is the same")
+      ->check(CLI::Range(0, 64));
   CLI::Option* csv =
       c->add_option("--csv", o->csv, "write the poses as CSV: t,segment,w,x,y,z,px,py,pz");
   cli::add_deprecated_alias(*c, "--poses", o->csv_alias, csv);

@@ -87,6 +87,10 @@ struct PipelineConfig {
   /// SCHED_FIFO priority (1..49) of the device readers, the pipeline and the pose stream; 0 =
   /// normal scheduling. Keeps the latency low on a busy machine (needs CAP_SYS_NICE/LimitRTPRIO).
   int realtime_priority = 0;
+  /// A device reader whose samples carry the device's own time waits this long after a read
+  /// before the next (so a 1 kHz sensor is read in batches, not 1000 times a second); 0 = read
+  /// every sample at once. Not used with publish_every_sample.
+  double read_batch_ms = 4.0;
 };
 
 struct JsonOutputConfig {

@@ -57,10 +57,19 @@ class PipelineCore {
                std::vector<SensorInfo> sensors, PoseEngine& engine);
 
   void add_sink(FrameSink* sink) { sinks_.push_back(sink); }
+  PoseEngine& engine() { return engine_; }
   void remove_sink(FrameSink* sink);
 
   /// One sample (sensor_id indexes the rig). Publishes a frame too in per-sample mode.
   void process(const ImuSample& s);
+  /// process() for a sample whose filter step the engine already took (PoseEngine::prefilter
+  /// gave `o`): offline replay with filters on other threads.
+  void process(const ImuSample& s, const FilterOutput& o);
+  /// False for a sample process() rejects (an unknown sensor, a non-finite value): it never
+  /// reaches the engine, so it must not be prefiltered either.
+  bool accepts(const ImuSample& s) const;
+  /// A calibration countdown is running (its capture starts when it ends).
+  bool calibrating() const { return calibrating_; }
   /// Builds and publishes a frame "now" (t_now_ns: ages and countdowns are relative to it).
   void publish_frame(int64_t t_now_ns);
   /// Sample-time frame clock (replay): publishes the frames due before time t_ns, one per
@@ -104,6 +113,9 @@ class PipelineCore {
     int64_t t_device_ns = 0;  // and its device time
   };
   void maybe_finish_calibration(int64_t t_now_ns);
+  /// process() up to the engine call, and after it.
+  bool take(const ImuSample& s);
+  void taken(const ImuSample& s);
 
   PipelineConfig cfg_;
   CalibrationConfig calib_;

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "mocap/core/imu_sample.hpp"
+#include "mocap/filter/attitude_filter.hpp"
 #include "mocap/rig/facing.hpp"
 #include "mocap/rig/sensor_health.hpp"
 #include "mocap/skeleton/calibration.hpp"
@@ -44,6 +45,17 @@ class PoseEngine {
   virtual ~PoseEngine() = default;
   /// One sample of sensor `sensor_index` (index in the rig). Must not allocate.
   virtual void on_sample(int sensor_index, const ImuSample& sample) = 0;
+  /// Optional: on_sample in two steps, so that offline replay can run the filters of different
+  /// sensors on other threads (daemon/replay.cpp). prefilter() is the part that touches only
+  /// that sensor's state (its filter): callable from any thread, for different sensors at
+  /// once, ahead of on_prefiltered() of earlier samples; on_prefiltered() is the rest, in
+  /// sample order on the pipeline thread. Only while prefilter_allowed(). An engine without
+  /// the split returns false from prefilter_allowed().
+  virtual bool prefilter_allowed() const { return false; }
+  virtual FilterOutput prefilter(int /*sensor_index*/, const ImuSample& /*sample*/) { return {}; }
+  virtual void on_prefiltered(int sensor_index, const ImuSample& sample, const FilterOutput&) {
+    on_sample(sensor_index, sample);
+  }
   /// A sensor became silent (live = false) or came back; its segment is then inferred.
   virtual void set_sensor_live(int sensor_index, bool live) = 0;
   /// Fills the pose part of `out` (segment orientations, positions, joints, violations,

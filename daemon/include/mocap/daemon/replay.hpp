@@ -57,6 +57,11 @@ struct ReplayOptions {
   std::function<bool()> cancelled;               ///< polled now and then (signals)
   std::function<void(double)> progress;          ///< called about 10 times a second of work
   std::function<void(int64_t)> on_first_sample;  ///< the input's first sample time
+  /// > 0 (and speed 0): the filters of different sensors run on this many threads besides the
+  /// replay's own, a chunk of samples ahead of the rest of the pipeline (PoseEngine::prefilter;
+  /// sequential while a calibration is asked for or captured). The frames are the same, bit
+  /// for bit.
+  int filter_threads = 0;
 };
 
 struct ReplayResult {
@@ -68,5 +73,7 @@ struct ReplayResult {
 
 /// Plays every sample of `src` through `core` (which holds the engine and sinks).
 ReplayResult run_replay(SampleSource& src, PipelineCore& core, const ReplayOptions& opt);
+/// run_replay's path with opt.filter_threads (daemon/src/replay_parallel.cpp).
+ReplayResult run_replay_parallel(SampleSource& src, PipelineCore& core, const ReplayOptions& opt);
 
 }  // namespace mocap::daemon

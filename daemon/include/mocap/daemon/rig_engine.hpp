@@ -30,6 +30,11 @@ class RigEngine final : public PoseEngine {
   ~RigEngine() override;
 
   void on_sample(int sensor_index, const ImuSample& sample) override;
+  /// The filter/track split (BodyTracker::filter_sample, track_sample): not while a
+  /// calibration capture runs.
+  bool prefilter_allowed() const override { return !tracker_.capturing(); }
+  FilterOutput prefilter(int sensor_index, const ImuSample& sample) override;
+  void on_prefiltered(int sensor_index, const ImuSample& sample, const FilterOutput& o) override;
   void set_sensor_live(int sensor_index, bool live) override;
   void build_frame(int64_t t_ns, PoseFrame& out) override;
   SensorHealth sensor_health(int sensor_index) const override {
@@ -48,6 +53,8 @@ class RigEngine final : public PoseEngine {
   void flush_calibration_file();
 
  private:
+  /// After a sample: a calibration capture that ended is logged (and saved).
+  void after_sample(const ImuSample& s);
   Config cfg_;
   Logger* log_;
   rig::BodyTracker tracker_;

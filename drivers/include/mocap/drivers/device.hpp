@@ -60,6 +60,11 @@ struct DeviceSpec {
   /// SCHED_FIFO priority of the reader thread (0 = normal scheduling); see
   /// mocap/core/thread_priority.hpp. Not granted: a warning, and the device runs anyway.
   int realtime_priority = 0;
+  /// Reader batching: after a read whose samples all carried the device's own time (their
+  /// times do not depend on when they are read), the reader waits until this long after that
+  /// read before reading again. 0 = read as soon as bytes arrive. Untimed samples (stamped at
+  /// read) are always read at once.
+  int64_t read_batch_ns = 0;
 };
 
 /// Counters every decoder and device keeps (monotonic, never reset while running).
@@ -67,6 +72,7 @@ struct DecoderStats {
   uint64_t bytes = 0;            ///< bytes fed
   uint64_t frames = 0;           ///< frames that passed framing and checksum
   uint64_t samples = 0;          ///< ImuSamples emitted
+  uint64_t timed_samples = 0;    ///< of them, timed by the device's clock (not at read)
   uint64_t checksum_errors = 0;  ///< frames dropped for a bad checksum
   uint64_t resyncs = 0;          ///< times the framer skipped garbage to find a frame start
   uint64_t dropped_samples = 0;  ///< samples missing according to the device's counter

@@ -108,7 +108,7 @@ class AttitudeFilter {
                                      const Eigen::Matrix<double, 2, 9>& reg,
                                      const Eigen::Matrix3d& r_lp);
   [[gnu::noinline]] void update_hard_iron(const Eigen::Vector3d& mag_raw,
-                                          const Eigen::Quaterniond& q6, double dt_s);
+                                          const Eigen::Quaterniond& q6);
   void select_hard_iron(const Eigen::Vector3d& m_raw_e, const Eigen::Vector3d& m_corr_e);
   /// The (hard-iron corrected) field in the 6D earth frame, compensated for the magnetometer's
   /// latency behind the gyro (and the latency estimate updated).
@@ -127,7 +127,7 @@ class AttitudeFilter {
   double mag_latency_s() const;
   double heading_sigma_rad() const;
   bool stream_dt(int64_t t_ns, StreamTiming& timing, double& dt_s);
-  void refresh_coeffs();
+  [[gnu::noinline]] void refresh_coeffs();
 
   FilterParams p_;
   FilterCoeffs c_;

@@ -74,6 +74,15 @@ class BodyTracker {
 
   /// One sample of sensor `i` (its index in the rig). Never allocates.
   void on_sample(int i, const ImuSample& sample);
+  /// on_sample in two steps, for a caller that runs the filters of different sensors on other
+  /// threads (offline replay: daemon/replay.cpp). filter_sample(i, s) is steps 1-2 for sensor
+  /// i alone: it touches nothing but sensor i's filter, so calls for different sensors may run
+  /// concurrently, also with track_sample of other samples; it returns the filter's output.
+  /// track_sample(i, s, o) is the rest with that output, in sample order on one thread.
+  /// on_sample(i, s) == track_sample(i, s, filter_sample(i, s)). Not while capturing(): the
+  /// capture's end reads the filters' field norm (they must be in step).
+  FilterOutput filter_sample(int i, const ImuSample& sample);
+  void track_sample(int i, const ImuSample& sample, const FilterOutput& o);
   /// Starts a capture in `pose`; samples from t_start_ns on are averaged. The result is taken
   /// with take_calibration_result() after the sample that completes it. With mounting_motion
   /// (an N-pose only), the mounting motion follows the capture for options().mounting_motion_s
@@ -188,6 +197,11 @@ class BodyTracker {
   void suspect_local_fields(const CalibrationResult& r);
   /// The alignment changed: the skeleton takes its calibration.
   void publish_alignment();
+  /// Per sensor: its filter's output after its newest sample taken (what sensor_health(i) and
+  /// q_earth_sensor(i) report; the filter itself may have run ahead, see filter_sample).
+  std::vector<FilterOutput> last_output_;
+  /// The sample as the filter takes it: gyro scale divided out, no field in a 6D rig.
+  ImuSample prepared(int i, const ImuSample& in) const;
 };
 
 /// The rig mapping (segment -> sensor index) of a sensor list.

@@ -112,6 +112,8 @@ class SessionReader {
   /// The offset of the next valid block after `from` (UINT64_MAX if none).
   uint64_t resync(uint64_t from, Block& scratch, uint64_t limit);
 
+  /// file_'s stdio buffer: reads come in large blocks (a block is read as two small freads).
+  std::vector<char> file_buffer_;
   std::FILE* file_ = nullptr;
   uint64_t file_pos_ = 0;  ///< where file_'s stream stands
   std::vector<uint8_t> memory_;
