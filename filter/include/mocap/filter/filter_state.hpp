@@ -95,6 +95,7 @@ struct MagDisturbanceState {
   Lowpass<2> norm_dip_lp;
   double norm_dip[2] = {0, 0};  ///< smoothed field norm (uT) and dip (rad), 6D frame
   double head_dev_rad = 0;      ///< smoothed heading innovation (the field's heading - estimate)
+  bool head_settled = false;    ///< the heading test applies (update_mag_disturbance)
 };
 
 /// Hard-iron offset: the estimator and the choice of what it subtracts.
