@@ -153,9 +153,10 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double e
   // the heading has settled: before, the field is what sets it).
   d.head_dev_rad += c_.mag_dist.k_head * (err_rad - d.head_dev_rad);
   const double head = d.head_dev_rad;
-  // Settled: a reference, the start-up gain schedule over, no upset being checked (the heading
-  // may have been lost). From then on the heading is taken to be as uncertain as the field
-  // disagrees with it, so it converges on the field instead of locking out.
+  // Settled: a reference, the start-up gain schedule over, no clipped gyro sample being
+  // checked (the heading may have been lost: upset recovery). From then on the heading is
+  // taken to be as uncertain as the field disagrees with it, so it converges on the field
+  // instead of locking out.
   const bool settled = d.have_ref && st_.heading.k_init == 0 && !st_.upset.checking;
   if (settled && !d.head_settled) {
     st_.heading.delta_var_rad2 = std::max(st_.heading.delta_var_rad2, head * head);

@@ -21,11 +21,12 @@ namespace mocap {
 /// Per-kind counts of rejected or unusual input.
 struct FilterCounters {
   uint64_t gyr_ok = 0, acc_ok = 0, mag_ok = 0;
-  uint64_t nonfinite = 0;     ///< NaN or Inf component
-  uint64_t zero_vector = 0;   ///< acc or mag of (near) zero norm
-  uint64_t out_of_range = 0;  ///< absurd magnitude
-  uint64_t bad_time = 0;      ///< timestamp not after the previous one of the same stream
-  uint64_t gaps = 0;          ///< gaps longer than 5 nominal periods
+  uint64_t nonfinite = 0;         ///< NaN or Inf component
+  uint64_t zero_vector = 0;       ///< acc or mag of (near) zero norm
+  uint64_t out_of_range = 0;      ///< absurd magnitude
+  uint64_t bad_time = 0;          ///< timestamp not after the previous one of the same stream
+  uint64_t gaps = 0;              ///< gaps longer than 5 nominal periods
+  uint64_t upset_recoveries = 0;  ///< orientation set anew after clipped gyro samples
 };
 
 /// The filter's state flags, as a consumer reads them.
