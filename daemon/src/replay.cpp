@@ -11,6 +11,7 @@
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/daemon.hpp"
 #include "mocap/daemon/sample_csv.hpp"
+#include "mocap/daemon/text_lines.hpp"
 #include "mocap/drivers/device.hpp"
 #include "mocap/session/session_reader.hpp"
 
@@ -146,16 +147,15 @@ class CsvSourceImpl final : public SampleSource {
     // First pass: the sensor names (a rig needs them before the first sample).
     std::vector<std::string> names;
     {
-      std::ifstream in(path, std::ios::binary);
-      if (!in) throw std::runtime_error(path + ": cannot open");
+      TextLines in(path);
       SampleCsvParser p(path);
       ImuSample s;
       std::string line;
-      while (std::getline(in, line)) {
+      while (in.next(line)) {
         if (p.feed_line(line, s) < 0) throw std::runtime_error(p.error());
       }
+      if (!in.error().empty()) throw std::runtime_error(in.error());
       names = p.sensors();
-      in.clear();
     }
     if (rig) {
       cfg_ = *rig;
@@ -181,19 +181,15 @@ class CsvSourceImpl final : public SampleSource {
       if (cfg_.sensors.size() > static_cast<size_t>(kMaxSensors))
         throw std::runtime_error(path + ": more than " + std::to_string(kMaxSensors) + " sensors");
     }
-    in_.open(path, std::ios::binary);
-    in_.seekg(0, std::ios::end);
-    size_ = std::max<uint64_t>(1, static_cast<uint64_t>(in_.tellg()));
-    in_.seekg(0);
+    in_ = std::make_unique<TextLines>(path);
   }
   const Config& config() const override { return cfg_; }
   const std::string& error() const override { return error_; }
   double progress() const override {
-    return static_cast<double>(pos_) / static_cast<double>(size_);
+    return static_cast<double>(in_->file_offset()) / static_cast<double>(in_->file_size());
   }
   bool next(ImuSample& out) override {
-    while (std::getline(in_, line_)) {
-      pos_ += line_.size() + 1;
+    while (in_->next(line_)) {
       const int r = parser_.feed_line(line_, out);
       if (r < 0) {
         error_ = parser_.error();
@@ -204,6 +200,7 @@ class CsvSourceImpl final : public SampleSource {
         return true;
       }
     }
+    error_ = in_->error();
     return false;
   }
 
@@ -212,9 +209,8 @@ class CsvSourceImpl final : public SampleSource {
   SampleCsvParser parser_;
   Config cfg_;
   std::vector<int> map_;
-  std::ifstream in_;
+  std::unique_ptr<TextLines> in_;
   std::string line_, error_;
-  uint64_t size_ = 1, pos_ = 0;
 };
 
 }  // namespace

@@ -48,6 +48,8 @@ void AttitudeFilter::refresh_coeffs() {
   c_.heading.q_rad2_s = sh2 / std::max(p_.heading.tau_mag_s, 1e-9);
   c_.heading.r0_rad2 = sh2 * p_.heading.tau_mag_s / c_.ts.mag_s;
   c_.mag_dist.k_ref = gain_from_tau(p_.mag_dist.ref_tau_s, c_.ts.mag_s);
+  c_.mag_dist.head_th2_rad2 = sq(p_.mag_dist.heading_th_deg * kRadPerDeg);
+  c_.mag_dist.k_head = gain_from_tau(kHeadingDevTau_s, c_.ts.mag_s);
   // Hard-iron estimator: fixed period in seconds; variances relative to the field norm.
   c_.hard_iron.decim =
       std::max(1, static_cast<int>(std::lround(p_.hard_iron.step_s / c_.ts.mag_s)));

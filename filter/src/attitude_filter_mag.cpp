@@ -59,8 +59,11 @@ double AttitudeFilter::mag_latency_s() const {
   const Eigen::Vector3d mag = mag_raw - st_.hard_iron.applied_uT;
   const Eigen::Vector3d m_e = mag_to_earth(mag, q6);
   if (st_.upset.checking) upset_mag(mag);  // nothing to do while nothing was clipped
-  if (p_.mag_dist.rejection) update_mag_disturbance(m_e);
-  update_heading(m_e, dt_s);
+  // The heading the field implies against the gyro-propagated one (the 6D frame turns with the
+  // gyro, so in a homogeneous field this stays near 0).
+  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.heading.delta_rad);
+  if (p_.mag_dist.rejection) update_mag_disturbance(m_e, err);
+  update_heading(m_e, err, dt_s);
 }
 
 // Hard-iron estimator (decimated to hard_iron.step_s), fed with the latency-compensated raw
@@ -132,9 +135,10 @@ Eigen::Vector3d AttitudeFilter::mag_to_earth(const Eigen::Vector3d& mag,
   return m_e;
 }
 
-// Disturbance tests: the smoothed norm and dip against the reference (tracked while
-// undisturbed), and a candidate for a new reference (self-consistent while rotating).
-void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
+// Disturbance tests: the smoothed norm and dip of the field in the 6D frame and its heading
+// against the gyro-propagated one, each against a reference tracked slowly while undisturbed;
+// and a candidate for a new reference (self-consistent while rotating).
+void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double err_rad) {
   MagDisturbanceState& d = st_.mag_dist;
   const MagDisturbanceParams& p = p_.mag_dist;
   const double ts = c_.ts.mag_s;
@@ -145,19 +149,45 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
   d.norm_dip[1] = f[1];
   const double norm = f[0], dip = f[1];
   const double dip_th = p.dip_th_deg * kRadPerDeg;
-  if (std::abs(norm - d.ref_norm) < p.norm_th * d.ref_norm && std::abs(dip - d.ref_dip) < dip_th) {
+  // The heading innovation: the field's heading in the 6D frame minus the estimate. While the
+  // field is rejected the estimate turns only with the gyro, so a field that turns against it
+  // (a magnet or steel near the sensor, which may leave norm and dip alone) shows here; while
+  // it is followed the innovation's slow part is the estimate's lag, tracked as its reference.
+  // A deviation beyond the threshold plus three sigma of the heading is a disturbance (once
+  // the heading has settled: before, the field is what sets it).
+  d.head_dev_rad += c_.mag_dist.k_head * (err_rad - d.head_dev_rad);
+  const double head = d.head_dev_rad;
+  // Settled: a reference, the start-up gain schedule over, no clipped gyro sample being
+  // checked (the heading may have been lost: upset recovery). From then on the heading is
+  // taken to be as uncertain as the field disagrees with it, so it converges on the field
+  // instead of locking out.
+  const bool settled = d.have_ref && st_.heading.k_init == 0 && !st_.upset.checking;
+  if (settled && !d.head_settled) {
+    st_.heading.delta_var_rad2 = std::max(st_.heading.delta_var_rad2, head * head);
+    d.ref_head_rad = 0;
+  }
+  d.head_settled = settled;
+  if (!settled) d.ref_head_rad = head;
+  const double dref = head - d.ref_head_rad;
+  const bool head_ok = dref * dref < c_.mag_dist.head_th2_rad2 + 9 * st_.heading.delta_var_rad2;
+  if (std::abs(norm - d.ref_norm) < p.norm_th * d.ref_norm && std::abs(dip - d.ref_dip) < dip_th &&
+      head_ok) {
     d.undisturbed_t_s += ts;
     if (d.undisturbed_t_s >= p.min_undisturbed_time_s) {
       d.disturbed = false;
       d.ref_norm += c_.mag_dist.k_ref * (norm - d.ref_norm);
       d.ref_dip += c_.mag_dist.k_ref * (dip - d.ref_dip);
+      d.ref_head_rad += c_.mag_dist.k_ref * dref;
     }
   } else {
     d.undisturbed_t_s = 0;
     d.disturbed = true;
   }
+  const double dh = head - d.cand_head_rad;
   if (std::abs(norm - d.cand_norm) < p.norm_th * d.cand_norm &&
-      std::abs(dip - d.cand_dip) < dip_th) {
+      std::abs(dip - d.cand_dip) < dip_th && dh * dh < 4 * c_.mag_dist.head_th2_rad2) {
+    // (The candidate is one field while its heading stays within twice the threshold: wider
+    // than the test, as the field's heading wanders more than its norm and dip in motion.)
     // A new field replacing a known one must be seen while rotating (a static local
     // disturbance stays self-consistent at rest); the very first field needs no rotation.
     if (d.ref_norm == 0 || st_.rest.last_gyr_lp.norm() >= p.new_min_gyr_deg_s * kRadPerDeg)
@@ -165,6 +195,7 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
     d.cand_age_s += ts;
     d.cand_norm += c_.mag_dist.k_ref * (norm - d.cand_norm);
     d.cand_dip += c_.mag_dist.k_ref * (dip - d.cand_dip);
+    d.cand_head_rad += c_.mag_dist.k_ref * dh;
     if (d.disturbed &&
         (d.cand_t_s >= p.new_time_s || (d.ref_norm == 0 && d.cand_t_s >= p.new_first_time_s))) {
       if (!d.have_ref) end_mag_startup();
@@ -172,22 +203,29 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e) {
       d.ref_dip = d.cand_dip;
       d.disturbed = false;
       d.undisturbed_t_s = p.min_undisturbed_time_s;
+      if (settled) {
+        // The new field's heading disagrees with the gyro-propagated one by the candidate's
+        // innovation: the heading is that uncertain, and converges on the new field.
+        HeadingState& h = st_.heading;
+        h.delta_var_rad2 = std::max(h.delta_var_rad2, d.cand_head_rad * d.cand_head_rad);
+        d.ref_head_rad = 0;
+      }
     }
   } else {
     d.cand_t_s = 0;
     d.cand_age_s = 0;
     d.cand_norm = norm;
     d.cand_dip = dip;
+    d.cand_head_rad = head;
   }
 }
 
 // Kalman heading. Predict: the heading drifts by the nominal process noise plus what the
 // gyro-bias uncertainty allows. Update with the field's heading in the 6D frame, at the gain
 // the rejection and start-up rules leave; Joseph form (valid for those gains as well).
-void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double dt_s) {
+void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double err, double dt_s) {
   HeadingState& h = st_.heading;
   h.last_m_e = m_e;
-  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - h.delta_rad);
   const double sb2 = st_.bias.p(2, 2) * (0.01 * kRadPerDeg) * (0.01 * kRadPerDeg);
   h.delta_var_rad2 += (c_.heading.q_rad2_s + sb2) * (dt_s > 0 ? dt_s : c_.ts.mag_s);  // real gap
   const double r = heading_measurement_var();
@@ -209,6 +247,10 @@ double AttitudeFilter::heading_measurement_var() const {
     const double rd = ref ? d.ref_dip : d.cand_dip;
     double score =
         p_.mag_dist.trust_weight * field_deviation2(d.norm_dip[0], d.norm_dip[1], rn, rd);
+    if (ref) {  // the heading's deviation, once a reference exists
+      const double x = d.head_dev_rad - d.ref_head_rad;
+      score += p_.mag_dist.trust_weight * x * x / c_.mag_dist.head_th2_rad2;
+    }
     score += d.reject_t_s / p_.heading.tau_mag_s;
     r *= 1.0 + score;
   }

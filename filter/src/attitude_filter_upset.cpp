@@ -113,6 +113,7 @@ void AttitudeFilter::check_upset(const Eigen::Vector3d& acc) {
 void AttitudeFilter::recover_upset(const Eigen::Quaterniond& q_acc, double delta_rad,
                                    bool with_heading) {
   UpsetState& u = st_.upset;
+  ++cnt_.upset_recoveries;
   InclinationState& in = st_.inclination;
   const Eigen::Vector3d up_i = q_acc.conjugate() * Eigen::Vector3d::UnitZ();
   const auto& lp = in.acc_lp.out;

@@ -47,6 +47,7 @@ const Entry kEntries[] = {
     P(mag_ref_tau_s, mag_dist, ref_tau_s),
     P(mag_norm_th, mag_dist, norm_th),
     P(mag_dip_th_deg, mag_dist, dip_th_deg),
+    P(mag_heading_th_deg, mag_dist, heading_th_deg),
     P(mag_new_time_s, mag_dist, new_time_s),
     P(mag_new_first_time_s, mag_dist, new_first_time_s),
     P(mag_new_min_gyr_deg_s, mag_dist, new_min_gyr_deg_s),

@@ -69,7 +69,7 @@ class StandInEngine final : public PoseEngine {
     out.joint_violation_deg[0] = static_cast<float>(captures_);
   }
   SensorHealth sensor_health(int) const override { return {}; }
-  void calibrate(CalibrationPose) override {
+  void calibrate(CalibrationPose, bool) override {
     capturing_ = true;
     capture_end_ns_ = newest_ns_ + 300'000'000;
   }

@@ -1,7 +1,7 @@
 // Upset recovery (UpsetParams): after a clipped gyro the filter finds the rotation it lost within
 // about a second, in inclination and heading; on real data (BROAD, optical truth) read as a
 // lower-range gyro would it is better than without; and checks after every fast motion of
-// real trials change nothing (no false verdicts).
+// real trials find nothing (no false verdicts).
 #include <gtest/gtest.h>
 
 #include "mocap/eval/broad_metric.hpp"
@@ -117,16 +117,27 @@ TEST(UpsetRecovery, RealFastRotationReadAtLowerFullScaleIsTrackedBetter) {
   EXPECT_LT(with, 0.95 * without);
 }
 
-TEST(UpsetRecovery, ChecksAfterEveryFastRealMotionChangeNothing) {
+TEST(UpsetRecovery, ChecksAfterEveryFastRealMotionFindNothing) {
   // A check after every sample faster than 30 deg/s (as if each were clipped) on real fast
-  // rotation and translation: no verdict may fire, the figures equal those without recovery.
+  // rotation and translation: no verdict may fire. (The figures still move a little: while a
+  // clipped sample is checked the heading may have been lost, so the field's heading is not
+  // tested against the gyro's; docs/filter.md.)
   FilterParams every, off;
   std::string err;
   ASSERT_TRUE(set_filter_param(every, "upset_gyr_deg_s=30", err)) << err;
   off.upset.enabled = false;
-  for (const char* trial :
+  for (const char* file :
        {"06_undisturbed_fast_rotation_A.csv.gz", "15_undisturbed_fast_translation_A.csv.gz"}) {
-    EXPECT_NEAR(broad_total_deg(trial, 0, every), broad_total_deg(trial, 0, off), 1e-9) << trial;
+    BroadTrial trial;
+    ASSERT_TRUE(read_broad_csv(kBroad + file, trial, err)) << err;
+    AttitudeFilter f(every);
+    std::vector<Eigen::Quaterniond> est(trial.size());
+    for (size_t i = 0; i < trial.size(); ++i) {
+      f.update(trial_sample(trial, i, FilterMode::k9d));
+      est[i] = f.output().q_earth_sensor;
+    }
+    EXPECT_EQ(f.counters().upset_recoveries, 0u) << file;
+    EXPECT_NEAR(score_trial(trial, est).total_deg, broad_total_deg(file, 0, off), 0.1) << file;
   }
 }
 

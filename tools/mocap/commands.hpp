@@ -18,5 +18,6 @@ void add_evaluate(CLI::App& app, int& exit_code);
 void add_gyro_scale(CLI::App& app, int& exit_code);
 void add_score(CLI::App& app, int& exit_code);
 void add_setup(CLI::App& app, int& exit_code);
+void add_stills(CLI::App& app, int& exit_code);
 
 }  // namespace mocap::cmd

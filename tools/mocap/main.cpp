@@ -9,7 +9,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   using namespace mocap::cmd;
   for (auto add : {add_filter, add_simulate, add_perform, add_replay, add_export, add_devices,
-                   add_bench, add_evaluate, add_gyro_scale, add_score, add_setup})
+                   add_bench, add_evaluate, add_gyro_scale, add_score, add_setup, add_stills})
     add(app, exit_code);
   app.footer("'mocap COMMAND --help' describes a command.");  // after: not inherited
   if (auto done = mocap::cli::parse(app, argc, argv)) return *done;

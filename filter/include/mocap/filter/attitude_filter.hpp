@@ -21,11 +21,12 @@ namespace mocap {
 /// Per-kind counts of rejected or unusual input.
 struct FilterCounters {
   uint64_t gyr_ok = 0, acc_ok = 0, mag_ok = 0;
-  uint64_t nonfinite = 0;     ///< NaN or Inf component
-  uint64_t zero_vector = 0;   ///< acc or mag of (near) zero norm
-  uint64_t out_of_range = 0;  ///< absurd magnitude
-  uint64_t bad_time = 0;      ///< timestamp not after the previous one of the same stream
-  uint64_t gaps = 0;          ///< gaps longer than 5 nominal periods
+  uint64_t nonfinite = 0;         ///< NaN or Inf component
+  uint64_t zero_vector = 0;       ///< acc or mag of (near) zero norm
+  uint64_t out_of_range = 0;      ///< absurd magnitude
+  uint64_t bad_time = 0;          ///< timestamp not after the previous one of the same stream
+  uint64_t gaps = 0;              ///< gaps longer than 5 nominal periods
+  uint64_t upset_recoveries = 0;  ///< orientation set anew after clipped gyro samples
 };
 
 /// The filter's state flags, as a consumer reads them.
@@ -113,8 +114,9 @@ class AttitudeFilter {
   /// The (hard-iron corrected) field in the 6D earth frame, compensated for the magnetometer's
   /// latency behind the gyro (and the latency estimate updated).
   Eigen::Vector3d mag_to_earth(const Eigen::Vector3d& mag, const Eigen::Quaterniond& q6);
-  void update_mag_disturbance(const Eigen::Vector3d& m_e);
-  void update_heading(const Eigen::Vector3d& m_e, double dt_s);
+  /// err_rad: the field's heading in the 6D frame minus the heading estimate.
+  void update_mag_disturbance(const Eigen::Vector3d& m_e, double err_rad);
+  void update_heading(const Eigen::Vector3d& m_e, double err_rad, double dt_s);
   /// The heading measurement's variance: nominal, inflated by the soft trust score.
   double heading_measurement_var() const;
   /// The heading gain after the rejection and start-up rules (k: the Kalman gain).

@@ -37,9 +37,15 @@ struct HeadingCoeffs {
   double q_rad2_s = 0, r0_rad2 = 0;  ///< Kalman process (per s) and measurement variance
 };
 
+/// s, smoothing of the heading innovation for the disturbance test (norm and dip: the
+/// parameter mag_dist.current_tau_s): the field's heading is noisier than its norm and dip.
+inline constexpr double kHeadingDevTau_s = 0.5;
+
 struct MagDisturbanceCoeffs {
   LowpassCoeffs norm_dip_lp;
-  double k_ref = 0;  ///< first-order gain of the reference (and candidate) tracking
+  double head_th2_rad2 = 0;  ///< heading_th_deg squared, rad^2
+  double k_head = 0;         ///< first-order gain of the heading innovation's smoothing
+  double k_ref = 0;          ///< first-order gain of the reference (and candidate) tracking
 };
 
 struct HardIronStageCoeffs {

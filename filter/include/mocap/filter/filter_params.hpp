@@ -57,11 +57,15 @@ struct RestParams {
 /// mag_no_reference); when it is accepted the start-up gain schedule (K >= 1/N for tau_mag_s)
 /// restarts from the provisional heading's variance, counting only samples that pass the tests.
 struct MagDisturbanceParams {
-  bool rejection = true;                ///< the disturbance tests, rejection and start-up state
-  double current_tau_s = 0.05;          ///< s, smoothing of the field norm and dip
-  double ref_tau_s = 20.0;              ///< s, tracking of the reference norm and dip
-  double norm_th = 0.1;                 ///< -, relative norm deviation counted as disturbed
-  double dip_th_deg = 10.0;             ///< deg, dip deviation counted as disturbed
+  bool rejection = true;        ///< the disturbance tests, rejection and start-up state
+  double current_tau_s = 0.05;  ///< s, smoothing of the field norm and dip
+  double ref_tau_s = 20.0;      ///< s, tracking of the reference norm and dip
+  double norm_th = 0.1;         ///< -, relative norm deviation counted as disturbed
+  double dip_th_deg = 10.0;     ///< deg, dip deviation counted as disturbed
+  /// deg, heading deviation counted as disturbed (ours): the field's heading in the 6D frame
+  /// against the gyro-propagated heading (smoothed over 0.5 s, its slow part tracked), beyond
+  /// three sigma of the heading; once the heading has settled
+  double heading_th_deg = 5.0;
   double new_time_s = 20.0;             ///< s, a new consistent field is accepted after this
   double new_first_time_s = 5.0;        ///< s, ... or this for the first field
   double new_min_gyr_deg_s = 20.0;      ///< deg/s, only while rotating at least this fast
@@ -70,8 +74,8 @@ struct MagDisturbanceParams {
   double rejection_factor = 2.0;        ///< -, gain divisor after that
 
   /// -, soft trust: the heading measurement variance is multiplied by 1 + score, score =
-  /// trust_weight * ((norm dev / norm_th)^2 + (dip dev / dip_th_deg)^2)
-  /// + (rejection time not yet repaid) / tau_mag_s.
+  /// trust_weight * ((norm dev / norm_th)^2 + (dip dev / dip_th_deg)^2
+  /// + (heading dev / heading_th_deg)^2) + (rejection time not yet repaid) / tau_mag_s.
   double trust_weight = 3.0;
 };
 

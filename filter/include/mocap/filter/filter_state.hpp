@@ -87,11 +87,15 @@ struct MagDisturbanceState {
   bool disturbed = true;
   bool have_ref = false;             ///< a reference field was accepted (start-up is over)
   double ref_norm = 0, ref_dip = 0;  ///< reference field, uT and rad (6D frame)
+  double ref_head_rad = 0;           ///< reference of the heading innovation (its slow part)
   double undisturbed_t_s = 0, reject_t_s = 0;
   double cand_norm = -1, cand_dip = 0, cand_t_s = 0;  ///< candidate reference
-  double cand_age_s = 0;  ///< time the field has stayed consistent with the candidate
+  double cand_age_s = 0;     ///< time the field has stayed consistent with the candidate
+  double cand_head_rad = 0;  ///< the candidate's heading against the gyro-propagated heading
   Lowpass<2> norm_dip_lp;
   double norm_dip[2] = {0, 0};  ///< smoothed field norm (uT) and dip (rad), 6D frame
+  double head_dev_rad = 0;      ///< smoothed heading innovation (the field's heading - estimate)
+  bool head_settled = false;    ///< the heading test applies (update_mag_disturbance)
 };
 
 /// Hard-iron offset: the estimator and the choice of what it subtracts.
