@@ -179,6 +179,15 @@ class BodyTracker {
                                 const Eigen::Vector3d& gyro_bias_rad_s);
   /// Fits the segments whose facing is unknown (and refines those from a site normal).
   void start_heading_from_motion();
+  /// Whether segment s's heading is known (shares the earth frame, or has a facing).
+  bool heading_known(int s, const std::array<bool, kSegmentCount>& own) const;
+  /// The nearest segment above s whose heading is known; -1 if none.
+  int known_above(int s, const std::array<bool, kSegmentCount>& own) const;
+  /// Segment s's fit against `ref`: acceleration pairing or rates, the lever arms.
+  void set_up_fit(int s, int ref);
+  /// Segment s got a facing or turned: the fits below it start over against the nearest
+  /// known segment above them.
+  void refit_against(int s);
   /// Facings found from motion: each replaces a held one where replaces() says so; those of
   /// sensors sharing the earth frame vote on the body heading.
   void apply_facings(const std::array<Facing, kSegmentCount>& facing);
