@@ -167,13 +167,13 @@ void BodyTracker::track_sample(int i, const ImuSample& in, const FilterOutput& o
     h.axis.add(q_earth_sensor(up), q, w_rad_s_[static_cast<size_t>(up)], w_rad_s_[k], s.t_host_ns);
     if (h.axis.updated()) apply_hinge_axes(h);
   }
-  // 5. 6D: the heading of the sensors whose facing the calibration could not give, from motion.
+  // 6. 6D: the heading of the sensors whose facing is still unknown, from motion.
   if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
     feed_heading_from_motion(i, s, q, o.gyro_bias_rad_s);
     apply_heading_from_motion(s.t_host_ns);
   }
   publish_alignment();
-  // 6. The segment's input: orientation and the filter's flags.
+  // 7. The segment's input: orientation and the filter's flags.
   skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, sensor_health(i, o).segment_flags());
 }
 

@@ -8,9 +8,13 @@
 //      field turns (local_field_watch.hpp),
 //   4. the calibration capture (pose_capture.hpp) and, when it completes, the calibration
 //      (calibrate.hpp) into the segments' alignment,
-//   5. in 6D, the heading alignment from motion of the sensors whose facing the calibration
-//      could not give (heading_from_motion.hpp),
-//   6. the skeleton's input (orientation and flags);
+//   5. mounting from motion: the mounting motion's window after an N-pose (mounting_motion.hpp)
+//      and the knees' and elbows' hinge axes from any motion (hinge_axis.hpp), each giving
+//      facings that replace assumed ones (facing.hpp: replaces); a segment that gets its facing
+//      restarts the fits below it,
+//   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
+//      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted,
+//   7. the skeleton's input (orientation and flags);
 // and per frame the skeleton solve (each segment holds its sensor's newest orientation).
 //
 // Each segment's alignment (mounting and heading, with the source and sigma of each) has one
