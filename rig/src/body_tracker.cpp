@@ -227,8 +227,6 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
 }
 
 void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing) {
-  // A reference turned by more than this invalidates the fits against it.
-  constexpr double kRefitDeg = 5.0;
   std::array<bool, kSegmentCount> shared{};
   AlignSource source = AlignSource::none;
   for (int s = 0; s < kSegmentCount; ++s) {
@@ -244,10 +242,10 @@ void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing)
     }
     if (replaces(a.facing, facing[s])) {
       const bool was_known = a.facing.known();
-      const double change_rad = align_.set_facing(s, facing[s]);
+      align_.set_facing(s, facing[s]);
       heading_.stop(s);  // its heading follows the facing now, not a fit
       refine_[s] = false;
-      if (!was_known || std::abs(change_rad) > kRefitDeg * kRadPerDeg) refit_against(s);
+      if (!was_known) refit_against(s);
     }
     shared[s] = !a.own_frame;
     source = facing[s].source;
@@ -438,9 +436,11 @@ void BodyTracker::set_up_fit(int s, int ref) {
 }
 
 void BodyTracker::refit_against(int s) {
-  // Segment s got its facing or turned: each fit against s, or against a segment above s (s
-  // was not known), was matched to what is no longer so. It starts over against the nearest
-  // known segment above it now, and its first new estimate aligns it.
+  // Segment s got its facing: each fit below it against a segment further up (s was not
+  // known) starts over against the nearest known segment above it now, s or below, and its
+  // first new estimate aligns it. (A known reference's facing that moves does not restart the
+  // fits against it: they follow at the drift limit; restarting made the first estimate after
+  // each hinge update count, from little evidence.)
   const std::array<bool, kSegmentCount> own = own_heading_frames();
   for (int t = 0; t < kSegmentCount; ++t) {
     const int ref = heading_.reference(t);
@@ -450,7 +450,7 @@ void BodyTracker::refit_against(int s) {
       below = p == s;
     if (!below) continue;
     const int next = known_above(t, own);
-    if (ref != s && next == ref) continue;
+    if (next == ref) continue;
     heading_.restart(t, next);
     set_up_fit(t, next);
     heading_found_[t] = false;

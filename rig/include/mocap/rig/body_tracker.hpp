@@ -11,7 +11,7 @@
 //   5. mounting from motion: the mounting motion's window after an N-pose (mounting_motion.hpp)
 //      and the knees' and elbows' hinge axes from any motion (hinge_axis.hpp), each giving
 //      facings that replace assumed ones (facing.hpp: replaces); a segment that gets its facing
-//      restarts the fits below it,
+//      becomes the reference of the fits below it,
 //   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
 //      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted,
 //   7. the skeleton's input (orientation and flags);
@@ -189,8 +189,8 @@ class BodyTracker {
   int known_above(int s, const std::array<bool, kSegmentCount>& own) const;
   /// Segment s's fit against `ref`: acceleration pairing or rates, the lever arms.
   void set_up_fit(int s, int ref);
-  /// Segment s got a facing or turned: the fits below it start over against the nearest
-  /// known segment above them.
+  /// Segment s got its facing: the fits below it that were against a segment further up
+  /// start over against the nearest known one above them.
   void refit_against(int s);
   /// Facings found from motion: each replaces a held one where replaces() says so; those of
   /// sensors sharing the earth frame vote on the body heading.
