@@ -6,17 +6,17 @@
 #include <cstdio>
 #include <string>
 
-#include "mocap/daemon/pipeline_core.hpp"
+#include "mocap/outputs/output.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
-class PosesCsvSink final : public FrameSink {
+class PosesCsvSink final : public Output {
  public:
   /// Opens (truncates) the file and writes the header. Throws std::runtime_error on failure.
   PosesCsvSink(const std::string& path, int64_t t0_ns);
   ~PosesCsvSink() override;
   void set_t0(int64_t t0_ns) { t0_ns_ = t0_ns; }
-  void publish(const PoseFrame& f) override;
+  void on_frame(const PoseFrame& f) override;
   /// Flushes and closes; throws std::runtime_error if a write failed.
   void close();
 
@@ -26,4 +26,4 @@ class PosesCsvSink final : public FrameSink {
   int64_t t0_ns_;
 };
 
-}  // namespace mocap::daemon
+}  // namespace mocap::outputs

@@ -4,17 +4,20 @@
 // and sends Root/Pos, Bone/Pos, OK and T in bundles of at most 1500 bytes (docs/streaming.md).
 #pragma once
 
-#include "mocap/daemon/osc.hpp"
+#include "mocap/outputs/osc.hpp"
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 
+#include "mocap/outputs/output.hpp"
+#include "mocap/outputs/registry.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
 /// One humanoid bone as VMC sends it: Unity frame, local to the parent bone.
 struct VmcBone {
@@ -39,7 +42,7 @@ struct VmcPose {
 /// which we do not measure, are identity. Returns false if the frame holds a non-finite value.
 bool vmc_pose_from_frame(const PoseFrame& frame, VmcPose& out) noexcept;
 
-class VmcSender {
+class VmcSender final : public Output {
  public:
   /// host: the receiver (Marionette); VMC receivers listen on 39539 by convention.
   struct Options : osc::SenderOptions<39539> {
@@ -57,6 +60,7 @@ class VmcSender {
   /// Pipeline thread: encodes and sends one frame (non-blocking sendto, no allocation).
   /// Frame time (t_ns) drives the rate limit and /VMC/Ext/T.
   bool publish(const PoseFrame& frame) noexcept;
+  void on_frame(const PoseFrame& frame) override { publish(frame); }
   const Stats& stats() const { return stats_; }
 
  private:
@@ -69,4 +73,7 @@ class VmcSender {
   Stats stats_;
 };
 
-}  // namespace mocap::daemon
+/// The [outputs.vmc] output: an open VmcSender (registry factory).
+std::unique_ptr<Output> make_vmc(const OutputsConfig& cfg, const OutputContext& ctx);
+
+}  // namespace mocap::outputs

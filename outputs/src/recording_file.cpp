@@ -1,5 +1,5 @@
 // Exclusive creation of recording files inside recording.directory (recording_file.hpp).
-#include "mocap/daemon/recording_file.hpp"
+#include "mocap/outputs/recording_file.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
 namespace fs = std::filesystem;
 
@@ -135,4 +135,4 @@ RecordingFile create_recording_file(const std::string& directory, const std::str
   throw std::runtime_error("no free name for '" + dir_path + "/" + leaf + "'");
 }
 
-}  // namespace mocap::daemon
+}  // namespace mocap::outputs

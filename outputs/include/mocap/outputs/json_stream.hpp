@@ -1,11 +1,11 @@
-// The pose JSON stream: every PoseFrame as one line of JSON over TCP to any number of clients
-// (schema in docs/streaming.md). publish() is called from the pipeline thread: it formats once
-// into a preallocated slot and hands it to an I/O thread that serves non-blocking sockets under
-// poll(); slow clients skip frames, the pipeline never blocks. When max_clients are connected, a
-// new client takes the place of one that does not read (its kernel buffer full for 0.5 s, the
-// longest first; else the most unsent bytes, at least 128 KiB), else it is closed. When the process
-// runs out of file descriptors, a reserve fd is given up to accept and close the connection, and
-// accepting pauses for 100 ms (never a busy loop).
+// The pose JSON stream output: every PoseFrame as one line of JSON over TCP (or a private Unix
+// socket) to any number of clients (schema in docs/streaming.md). on_frame()/publish() run on the
+// pipeline thread: the frame is formatted once into a preallocated slot and handed to an I/O
+// thread that serves non-blocking sockets under poll(); slow clients skip frames, the pipeline
+// never blocks. When max_clients are connected, a new client takes the place of one that does not
+// read (its kernel buffer full for 0.5 s, the longest first; else the most unsent bytes, at least
+// 128 KiB), else it is closed. When the process runs out of file descriptors, a reserve fd is
+// given up to accept and close the connection, and accepting pauses for 100 ms (never a busy loop).
 #pragma once
 
 #include <atomic>
@@ -14,22 +14,17 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "mocap/core/wakeup.hpp"
-#include "mocap/skeleton/pose_frame.hpp"
+#include "mocap/outputs/output.hpp"
+#include "mocap/outputs/outputs_config.hpp"
+#include "mocap/outputs/pose_json.hpp"
+#include "mocap/outputs/registry.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
-/// Longest line format_pose_json() can produce (a full rig of 32 sensors fits with room).
-inline constexpr std::size_t kPoseJsonMaxLine = 16 * 1024;
-/// Schema version written as "v" in every line.
-inline constexpr int kPoseJsonVersion = 1;
-
-/// Formats one frame as a JSON line ending in '\n' into out[0..capacity). Returns the number of
-/// bytes written, or 0 if it does not fit. Allocates nothing. Non-finite numbers become null.
-std::size_t format_pose_json(const PoseFrame& frame, char* out, std::size_t capacity) noexcept;
-
-class PoseJsonServer {
+class PoseJsonServer final : public Output {
  public:
   struct Options {
     std::string bind_address = "127.0.0.1";  ///< IPv4 address to listen on (loopback default)
@@ -56,7 +51,7 @@ class PoseJsonServer {
   };
 
   PoseJsonServer();
-  ~PoseJsonServer();
+  ~PoseJsonServer() override;
   PoseJsonServer(const PoseJsonServer&) = delete;
   PoseJsonServer& operator=(const PoseJsonServer&) = delete;
 
@@ -68,6 +63,7 @@ class PoseJsonServer {
   /// Pipeline thread (single producer): formats the frame and hands it over. Never blocks,
   /// never allocates. Returns false if the frame was dropped (hand-off full or not started).
   bool publish(const PoseFrame& frame) noexcept;
+  void on_frame(const PoseFrame& frame) override { publish(frame); }
   Stats stats() const;
   /// Stops the I/O thread and closes every socket (also done by the destructor).
   void stop();
@@ -115,4 +111,11 @@ class PoseJsonServer {
   int64_t accept_paused_until_ = 0;  ///< I/O thread: no accept before (fds exhausted)
 };
 
-}  // namespace mocap::daemon
+/// The [outputs.json] output: a started PoseJsonServer (registry factory).
+std::unique_ptr<Output> make_json_stream(const OutputsConfig& cfg, const OutputContext& ctx);
+
+/// The TCP port the pose JSON stream among `outputs` listens on (the one picked when the
+/// configured port is 0); 0 when there is none.
+int json_stream_port(const std::vector<std::unique_ptr<Output>>& outputs);
+
+}  // namespace mocap::outputs

@@ -1,5 +1,5 @@
 // OSC 1.0 message and bundle encoding into fixed buffers (big-endian numbers, padded strings).
-#include "mocap/daemon/osc.hpp"
+#include "mocap/outputs/osc.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -10,7 +10,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace mocap::daemon::osc {
+namespace mocap::outputs::osc {
 namespace {
 void put_be32(uint8_t* p, uint32_t v) {
   p[0] = static_cast<uint8_t>(v >> 24);
@@ -100,4 +100,4 @@ bool UdpTarget::send(const void* data, std::size_t size) const noexcept {
                               reinterpret_cast<const sockaddr*>(addr_), sizeof(sockaddr_in)) >= 0;
 }
 
-}  // namespace mocap::daemon::osc
+}  // namespace mocap::outputs::osc

@@ -1,6 +1,6 @@
 // VMC sender: segment-to-HumanBodyBones mapping, conversion of our ENU/N-pose rotations to
 // Unity left-handed local rotations about a VRM T-pose rest, and OSC bundles over UDP.
-#include "mocap/daemon/vmc.hpp"
+#include "mocap/outputs/vmc.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -12,10 +12,11 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
-#include "mocap/daemon/osc.hpp"
+#include "mocap/outputs/osc.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 namespace {
 
 struct BoneDef {
@@ -188,4 +189,16 @@ bool VmcSender::publish(const PoseFrame& frame) noexcept {
   return ok;
 }
 
-}  // namespace mocap::daemon
+std::unique_ptr<Output> make_vmc(const OutputsConfig& cfg, const OutputContext& ctx) {
+  const VmcOutputConfig& c = cfg.vmc;
+  VmcSender::Options o;
+  o.host = c.host;
+  o.port = static_cast<uint16_t>(c.port);
+  auto sender = std::make_unique<VmcSender>();
+  std::string err;
+  if (!sender->open(o, &err)) throw std::runtime_error(err);
+  if (ctx.log) ctx.log->info("VMC to %s:%d", c.host.c_str(), c.port);
+  return sender;
+}
+
+}  // namespace mocap::outputs

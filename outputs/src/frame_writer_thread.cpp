@@ -1,9 +1,9 @@
 // An offline frame sink on a thread of its own (see frame_writer_thread.hpp).
-#include "mocap/daemon/frame_writer_thread.hpp"
+#include "mocap/outputs/frame_writer_thread.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
-FrameWriterThread::FrameWriterThread(FrameSink& target) : target_(target) {
+FrameWriterThread::FrameWriterThread(Output& target) : target_(target) {
   current_.reserve(kChunk);
   thread_ = std::thread([this] { run(); });
 }
@@ -15,7 +15,7 @@ FrameWriterThread::~FrameWriterThread() {
   }
 }
 
-void FrameWriterThread::publish(const PoseFrame& frame) {
+void FrameWriterThread::on_frame(const PoseFrame& frame) {
   current_.push_back(frame);
   if (current_.size() == kChunk) hand_over();
 }
@@ -63,7 +63,7 @@ void FrameWriterThread::run() {
     cv_.notify_all();
     try {
       for (const PoseFrame& f : chunk)
-        target_.publish(f);
+        target_.on_frame(f);
     } catch (...) {
       std::lock_guard lock(mu_);
       error_ = std::current_exception();
@@ -77,4 +77,4 @@ void FrameWriterThread::run() {
   }
 }
 
-}  // namespace mocap::daemon
+}  // namespace mocap::outputs

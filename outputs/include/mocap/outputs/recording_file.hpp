@@ -6,7 +6,7 @@
 #include <ctime>
 #include <string>
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
 inline constexpr const char* kSessionExtension = "mocapses";
 
@@ -32,4 +32,4 @@ std::string default_take_name(std::time_t now);
 RecordingFile create_recording_file(const std::string& directory, const std::string& name,
                                     bool unique, std::time_t now);
 
-}  // namespace mocap::daemon
+}  // namespace mocap::outputs

@@ -21,13 +21,13 @@
 
 #include "../common/free_port.hpp"
 #include "../common/oscdump_capture.hpp"
-#include "mocap/daemon/vmc.hpp"
+#include "mocap/outputs/vmc.hpp"
 
 using namespace mocap;
-using mocap::daemon::kVmcBoneCount;
-using mocap::daemon::vmc_pose_from_frame;
-using mocap::daemon::VmcPose;
-using mocap::daemon::VmcSender;
+using mocap::outputs::kVmcBoneCount;
+using mocap::outputs::vmc_pose_from_frame;
+using mocap::outputs::VmcPose;
+using mocap::outputs::VmcSender;
 
 namespace {
 

@@ -1,6 +1,6 @@
 // VRChat OSC trackers: our ENU segment poses to Unity world positions and Euler angles (Unity's
 // Z-X-Y order), one OSC message per UDP datagram.
-#include "mocap/daemon/vrchat.hpp"
+#include "mocap/outputs/vrchat.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -12,11 +12,13 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
+#include "mocap/core/segments.hpp"
 #include "mocap/core/units.hpp"
-#include "mocap/daemon/osc.hpp"
+#include "mocap/outputs/osc.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 namespace {
 
 /// Wraps degrees to (-180, 180].
@@ -122,4 +124,23 @@ bool VrchatSender::publish(const PoseFrame& frame) noexcept {
   return ok;
 }
 
-}  // namespace mocap::daemon
+std::unique_ptr<Output> make_vrchat(const OutputsConfig& cfg, const OutputContext& ctx) {
+  const VrchatOutputConfig& c = cfg.vrchat;
+  VrchatSender::Options o;
+  o.host = c.host;
+  o.port = static_cast<uint16_t>(c.port);
+  o.slots.fill(-1);
+  for (std::size_t i = 0; i < c.trackers.size() && i < o.slots.size(); ++i)
+    if (const auto s = segment_from_name(c.trackers[i])) o.slots[i] = index(*s);
+  o.head = c.head;
+  o.scale = c.height_m > 0 && ctx.model_height_m > 0 ? c.height_m / ctx.model_height_m : 1.0;
+  auto sender = std::make_unique<VrchatSender>();
+  std::string err;
+  if (!sender->open(o, &err)) throw std::runtime_error(err);
+  if (ctx.log)
+    ctx.log->info("VRChat OSC trackers to %s:%d (position scale %.3f)", c.host.c_str(), c.port,
+                  o.scale);
+  return sender;
+}
+
+}  // namespace mocap::outputs

@@ -19,13 +19,13 @@
 #include "../common/free_port.hpp"
 #include "../common/oscdump_capture.hpp"
 #include "mocap/core/units.hpp"
-#include "mocap/daemon/vrchat.hpp"
+#include "mocap/outputs/vrchat.hpp"
 
 using namespace mocap;
-using mocap::daemon::unity_euler_deg;
-using mocap::daemon::vrchat_tracker_from_frame;
-using mocap::daemon::VrchatSender;
-using mocap::daemon::VrchatTracker;
+using mocap::outputs::unity_euler_deg;
+using mocap::outputs::vrchat_tracker_from_frame;
+using mocap::outputs::VrchatSender;
+using mocap::outputs::VrchatTracker;
 
 namespace {
 
@@ -184,7 +184,7 @@ TEST(VrchatSender, OscdumpReceivesTrackersWithUnityPositionsAndEulerAngles) {
   const PoseFrame f = known_pose(0);
   std::map<std::string, std::array<float, 3>> expect;
   const char* slot_names[] = {"1", "2", "3", "4", "5", "6", "7", "8"};
-  for (int i = 0; i < daemon::kVrchatTrackerSlots; ++i) {
+  for (int i = 0; i < outputs::kVrchatTrackerSlots; ++i) {
     VrchatTracker t;
     ASSERT_TRUE(vrchat_tracker_from_frame(f, opt.slots[i], 1.0, t));
     expect[std::string("/tracking/trackers/") + slot_names[i] + "/position"] = t.p;

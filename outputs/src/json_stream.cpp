@@ -2,7 +2,7 @@
 // The pipeline hands formatted lines over through a fixed ring of slots; the I/O thread copies each
 // line into every client's bounded queue (or skips it for that client) and writes with non-blocking
 // sockets.
-#include "mocap/daemon/json_stream.hpp"
+#include "mocap/outputs/json_stream.hpp"
 
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -19,12 +19,13 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <stdexcept>
 #include <vector>
 
 #include "mocap/core/thread_priority.hpp"
 #include "mocap/core/time.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
 /// One connected client: a byte ring holding whole queued lines.
 struct PoseJsonServer::Client {
@@ -353,4 +354,30 @@ void PoseJsonServer::run() {
   }
 }
 
-}  // namespace mocap::daemon
+std::unique_ptr<Output> make_json_stream(const OutputsConfig& cfg, const OutputContext& ctx) {
+  const JsonOutputConfig& c = cfg.json;
+  PoseJsonServer::Options o;
+  o.realtime_priority = ctx.realtime_priority;
+  o.bind_address = c.bind;
+  o.port = static_cast<uint16_t>(c.port);
+  o.max_clients = c.max_clients;
+  o.unix_path = c.unix_socket;
+  auto server = std::make_unique<PoseJsonServer>();
+  std::string err;
+  if (!server->start(o, &err)) throw std::runtime_error(err);
+  if (ctx.log) {
+    if (c.unix_socket.empty())
+      ctx.log->info("pose JSON stream on %s:%u", c.bind.c_str(), server->port());
+    else
+      ctx.log->info("pose JSON stream on Unix socket %s (mode 0600)", c.unix_socket.c_str());
+  }
+  return server;
+}
+
+int json_stream_port(const std::vector<std::unique_ptr<Output>>& outputs) {
+  for (const auto& o : outputs)
+    if (const auto* j = dynamic_cast<const PoseJsonServer*>(o.get())) return j->port();
+  return 0;
+}
+
+}  // namespace mocap::outputs

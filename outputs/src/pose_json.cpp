@@ -6,9 +6,9 @@
 #include <string_view>
 
 #include "mocap/core/fixed_chars.hpp"
-#include "mocap/daemon/json_stream.hpp"
+#include "mocap/outputs/pose_json.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 namespace {
 
 /// Length of the well-formed UTF-8 sequence (RFC 3629: no overlong form, surrogate or code
@@ -204,4 +204,4 @@ std::size_t format_pose_json(const PoseFrame& f, char* out, std::size_t capacity
   return static_cast<std::size_t>(o.pos() - out);
 }
 
-}  // namespace mocap::daemon
+}  // namespace mocap::outputs

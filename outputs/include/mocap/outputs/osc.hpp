@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-namespace mocap::daemon::osc {
+namespace mocap::outputs::osc {
 
 /// A non-blocking UDP socket aimed at one IPv4 host:port: the OSC senders' transport (VMC,
 /// VRChat).
@@ -123,4 +123,4 @@ class BundleWriter {
   int count_ = 0;
 };
 
-}  // namespace mocap::daemon::osc
+}  // namespace mocap::outputs::osc

@@ -4,16 +4,19 @@
 // degrees in Unity's order (Z, then X, then Y). docs/streaming.md section 3.
 #pragma once
 
-#include "mocap/daemon/osc.hpp"
+#include "mocap/outputs/osc.hpp"
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 
+#include "mocap/outputs/output.hpp"
+#include "mocap/outputs/registry.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
 inline constexpr int kVrchatTrackerSlots = 8;
 
@@ -35,7 +38,7 @@ struct VrchatTracker {
 bool vrchat_tracker_from_frame(const PoseFrame& frame, int segment, double scale,
                                VrchatTracker& out) noexcept;
 
-class VrchatSender {
+class VrchatSender final : public Output {
  public:
   /// host: VRChat's (a Quest on the LAN); 9000 is VRChat's OSC input port.
   struct Options : osc::SenderOptions<9000> {
@@ -58,6 +61,7 @@ class VrchatSender {
   /// Pipeline thread: encodes and sends one frame, each OSC message as its own datagram
   /// (non-blocking sendto, no allocation). The frame time drives the rate limit.
   bool publish(const PoseFrame& frame) noexcept;
+  void on_frame(const PoseFrame& frame) override { publish(frame); }
   const Stats& stats() const { return stats_; }
 
  private:
@@ -67,4 +71,7 @@ class VrchatSender {
   Stats stats_;
 };
 
-}  // namespace mocap::daemon
+/// The [outputs.vrchat] output: an open VrchatSender (registry factory).
+std::unique_ptr<Output> make_vrchat(const OutputsConfig& cfg, const OutputContext& ctx);
+
+}  // namespace mocap::outputs

@@ -1,5 +1,5 @@
 // PosesCsvSink: pose frames to CSV, fixed decimals (stable text for golden files).
-#include "mocap/daemon/poses_csv.hpp"
+#include "mocap/outputs/poses_csv.hpp"
 
 #include <cerrno>
 #include <cstring>
@@ -7,7 +7,7 @@
 
 #include "mocap/core/segments.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
 PosesCsvSink::PosesCsvSink(const std::string& path, int64_t t0_ns) : path_(path), t0_ns_(t0_ns) {
   f_ = std::fopen(path.c_str(), "w");
@@ -19,7 +19,7 @@ PosesCsvSink::~PosesCsvSink() {
   if (f_) std::fclose(f_);
 }
 
-void PosesCsvSink::publish(const PoseFrame& f) {
+void PosesCsvSink::on_frame(const PoseFrame& f) {
   const double t = static_cast<double>(f.t_ns - t0_ns_) * 1e-9;
   for (int s = 0; s < kSegmentCount; ++s) {
     const auto& q = f.q_earth_segment[s];
@@ -37,4 +37,4 @@ void PosesCsvSink::close() {
   if (bad || close_failed) throw std::runtime_error(path_ + ": write failed");
 }
 
-}  // namespace mocap::daemon
+}  // namespace mocap::outputs

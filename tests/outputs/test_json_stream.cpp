@@ -18,11 +18,11 @@
 #include <thread>
 #include <vector>
 
-#include "mocap/daemon/json_stream.hpp"
+#include "mocap/outputs/json_stream.hpp"
 
 using mocap::PoseFrame;
-using mocap::daemon::format_pose_json;
-using mocap::daemon::PoseJsonServer;
+using mocap::outputs::format_pose_json;
+using mocap::outputs::PoseJsonServer;
 using nlohmann::json;
 
 namespace {
@@ -53,7 +53,7 @@ PoseFrame make_frame(uint64_t n) {
 }
 
 std::string format(const PoseFrame& f) {
-  std::vector<char> buf(mocap::daemon::kPoseJsonMaxLine);
+  std::vector<char> buf(mocap::outputs::kPoseJsonMaxLine);
   const std::size_t n = format_pose_json(f, buf.data(), buf.size());
   return std::string(buf.data(), n);
 }

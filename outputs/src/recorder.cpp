@@ -1,39 +1,19 @@
-// SessionRecorder: the daemon's recording, a thin tap over the I/O module's SessionWriter.
-#include "mocap/daemon/recorder.hpp"
+// SessionRecorder: the recording, a thin tap over the session module's SessionWriter.
+#include "mocap/outputs/recorder.hpp"
 
 #include <unistd.h>
 
 #include <ctime>
 #include <stdexcept>
 
-#include "mocap/core/segments.hpp"
 #include "mocap/core/time.hpp"
-#include "mocap/daemon/recording_file.hpp"
+#include "mocap/outputs/recording_file.hpp"
 
-namespace mocap::daemon {
+namespace mocap::outputs {
 
-session::SessionHeader session_header(const Config& cfg, std::string calibration_text) {
-  session::SessionHeader h;
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  h.t_start_unix_ns = static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-  h.t_start_host_ns = monotonic_ns();
-  h.config_text = config_to_toml(cfg);
-  h.calibration_text = std::move(calibration_text);
-  for (size_t i = 0; i < cfg.sensors.size(); ++i) {
-    session::SensorDescription d;
-    d.name = cfg.sensors[i].name;
-    d.protocol = cfg.sensors[i].driver;
-    if (auto seg = segment_from_name(cfg.sensors[i].segment)) d.segment = index(*seg);
-    d.device_index = static_cast<uint16_t>(i);
-    h.sensors.push_back(d);
-  }
-  return h;
-}
-
-SessionRecorder::SessionRecorder(Config cfg, std::function<std::string()> calibration_text,
-                                 Logger log)
-    : cfg_(std::move(cfg)), calibration_text_(std::move(calibration_text)), log_(std::move(log)) {}
+SessionRecorder::SessionRecorder(RecordingConfig cfg,
+                                 std::function<session::SessionHeader()> header, Logger log)
+    : cfg_(std::move(cfg)), header_(std::move(header)), log_(std::move(log)) {}
 
 SessionRecorder::~SessionRecorder() {
   stop();
@@ -41,16 +21,14 @@ SessionRecorder::~SessionRecorder() {
 
 RecordTap* SessionRecorder::start(const std::string& name, bool unique) {
   if (writer_) throw std::runtime_error("already recording");
-  RecordingFile f =
-      create_recording_file(cfg_.recording.directory, name, unique, std::time(nullptr));
+  RecordingFile f = create_recording_file(cfg_.directory, name, unique, std::time(nullptr));
   SessionWriter::Options o;
-  if (cfg_.recording.compression == "zstd")
-    o.compression = SessionWriter::Options::Compression::zstd;
-  o.compression_level = cfg_.recording.compression_level;
+  if (cfg_.compression == "zstd") o.compression = SessionWriter::Options::Compression::zstd;
+  o.compression_level = cfg_.compression_level;
   o.on_error = [this](const std::string& msg) { log_.error("recording failed: %s", msg.c_str()); };
   std::string err;
-  writer_ = SessionWriter::create_fd(
-      f.fd, f.path, session_header(cfg_, calibration_text_ ? calibration_text_() : ""), o, &err);
+  writer_ = SessionWriter::create_fd(f.fd, f.path, header_ ? header_() : session::SessionHeader{},
+                                     o, &err);
   if (!writer_) {
     ::unlinkat(f.dir_fd, f.leaf.c_str(), 0);  // our own new, empty file
     ::close(f.dir_fd);
@@ -96,16 +74,14 @@ std::string SessionRecorder::error() const {
 
 void SessionRecorder::on_raw(uint16_t device_index, int64_t t_host_ns,
                              std::span<const uint8_t> bytes) {
-  if (cfg_.recording.raw && writer_->append_raw(device_index, t_host_ns, bytes))
+  if (cfg_.raw && writer_->append_raw(device_index, t_host_ns, bytes))
     raw_blocks_.fetch_add(1, std::memory_order_relaxed);
 }
 void SessionRecorder::on_sample(const ImuSample& s) {
-  if (cfg_.recording.samples && writer_->append_sample(s))
-    samples_.fetch_add(1, std::memory_order_relaxed);
+  if (cfg_.samples && writer_->append_sample(s)) samples_.fetch_add(1, std::memory_order_relaxed);
 }
 void SessionRecorder::on_frame(const PoseFrame& f) {
-  if (cfg_.recording.poses && writer_->append_pose(f))
-    frames_.fetch_add(1, std::memory_order_relaxed);
+  if (cfg_.poses && writer_->append_pose(f)) frames_.fetch_add(1, std::memory_order_relaxed);
 }
 
-}  // namespace mocap::daemon
+}  // namespace mocap::outputs
