@@ -1,5 +1,5 @@
 // The shared posture output: an exclusive, private shared-memory object (ShmOwner) and the
-// skeleton's seqlock PostureWriter.
+// seqlock PostureWriter (posture_shm.hpp).
 #include "mocap/outputs/posture_output.hpp"
 
 #include <fcntl.h>
@@ -14,7 +14,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/outputs/posture_shm.hpp"
 
 namespace mocap::outputs {
 

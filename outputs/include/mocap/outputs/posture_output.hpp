@@ -1,5 +1,5 @@
 // The shared posture output ([outputs.posture]): each frame into the seqlocked shared memory the
-// viewer reads (the layout, writer and reader are skeleton/posture_shm.hpp). The object is held
+// viewer reads (the layout, writer and reader: posture_shm.hpp). The object is held
 // under an exclusive flock for the output's life, so a second mocapd publishing under the same name
 // is refused before it creates (or, on exit, removes) anything. Wait-free for the pipeline.
 #pragma once

@@ -6,9 +6,9 @@
 #include <atomic>
 #include <thread>
 
-#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/outputs/posture_shm.hpp"
 
-namespace mocap {
+namespace mocap::outputs {
 
 TEST(PostureShm, ReaderNeverSeesTornFrames) {
   const std::string name = "/mocap-test-" + std::to_string(getpid());
@@ -56,4 +56,4 @@ TEST(PostureShm, MissingSegmentIsAClearError) {
   }
 }
 
-}  // namespace mocap
+}  // namespace mocap::outputs

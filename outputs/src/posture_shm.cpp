@@ -1,5 +1,5 @@
 // Seqlock-protected shared-memory posture.
-#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/outputs/posture_shm.hpp"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -10,7 +10,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace mocap {
+namespace mocap::outputs {
 namespace {
 
 constexpr uint64_t kMagic = 0x4d4f434150505331ull;  // "MOCAPPS1"
@@ -120,4 +120,4 @@ bool PostureReader::read(PoseFrame& out) const noexcept {
   return false;
 }
 
-}  // namespace mocap
+}  // namespace mocap::outputs

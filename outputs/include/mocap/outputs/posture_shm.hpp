@@ -1,5 +1,6 @@
-// The shared posture: the latest PoseFrame in POSIX shared memory, written by the daemon under a
-// seqlock and read by the viewer and other local programs without ever blocking the writer.
+// The shared posture's format, both ends: the latest PoseFrame in POSIX shared memory, written
+// under a seqlock by the posture output (posture_output.hpp) and read by the viewer and other
+// local programs without ever blocking the writer.
 //
 // Layout: a header {magic, version, frame size, sequence} followed by the frame as 64-bit words.
 // The writer makes the sequence odd, stores the words (relaxed atomics), makes it even again.
@@ -11,7 +12,7 @@
 
 #include "mocap/skeleton/pose_frame.hpp"
 
-namespace mocap {
+namespace mocap::outputs {
 
 /// Default shared-memory name for the current user: "/mocap-posture-<uid>".
 std::string default_posture_shm_name();
@@ -52,4 +53,4 @@ class PostureReader {
   const void* map_ = nullptr;
 };
 
-}  // namespace mocap
+}  // namespace mocap::outputs
