@@ -38,7 +38,7 @@ class PipelineCore {
   PipelineCore(const PipelineConfig& cfg, const CalibrationConfig& calib,
                std::vector<SensorInfo> sensors, PoseEngine& engine);
 
-  /// Frame consumers (outputs::Output: called on this thread, must not block).
+  /// Frame consumers, called on the thread that drives this core (live: must not block).
   void add_sink(outputs::Output* sink) { sinks_.push_back(sink); }
   PoseEngine& engine() { return engine_; }
   void remove_sink(outputs::Output* sink);

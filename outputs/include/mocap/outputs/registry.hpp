@@ -1,7 +1,8 @@
 // The outputs the daemon can run, one row each: its name, the configuration section that enables
 // it, and the factory that builds and starts it from its options. Adding an output is its file
 // (an Output with a factory), its options struct in outputs_config.hpp, its keys in the daemon's
-// key table, and one row in src/registry.cpp.
+// key table, and one row in src/registry.cpp. The recorder is no row: the control socket starts
+// and stops it (recorder.hpp); replay's file writers are made by `mocap replay` itself.
 #pragma once
 
 #include <memory>
