@@ -2,6 +2,8 @@
 // orientation -> calibration and alignment -> skeleton, for one rig (see body_tracker.hpp).
 #include "mocap/rig/body_tracker.hpp"
 
+#include "mocap/skeleton/quat_math.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -165,13 +167,13 @@ void BodyTracker::track_sample(int i, const ImuSample& in, const FilterOutput& o
     h.axis.add(q_earth_sensor(up), q, w_rad_s_[static_cast<size_t>(up)], w_rad_s_[k], s.t_host_ns);
     if (h.axis.updated()) apply_hinge_axes(h);
   }
-  // 5. 6D: the heading of the sensors whose facing the calibration could not give, from motion.
+  // 6. 6D: the heading of the sensors whose facing is still unknown, from motion.
   if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
     feed_heading_from_motion(i, s, q, o.gyro_bias_rad_s);
     apply_heading_from_motion(s.t_host_ns);
   }
   publish_alignment();
-  // 6. The segment's input: orientation and the filter's flags.
+  // 7. The segment's input: orientation and the filter's flags.
   skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, sensor_health(i, o).segment_flags());
 }
 
@@ -225,15 +227,27 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
 }
 
 void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing) {
+  // A reference turned by more than this invalidates the fits against it.
+  constexpr double kRefitDeg = 5.0;
   std::array<bool, kSegmentCount> shared{};
   AlignSource source = AlignSource::none;
   for (int s = 0; s < kSegmentCount; ++s) {
     const SegmentAlignment& a = align_.segment(s);
     if (!facing[s].known() || !a.aligned) continue;
+    // A running estimate's update far off the facing it found (the hinge's signs chosen the
+    // other way in a stretch of odd motion) is refused, not followed: a segment never flips.
+    if (a.facing.source == facing[s].source &&
+        std::abs(wrap_angle_rad(facing[s].yaw_rad - a.facing.yaw_rad)) >
+            Alignment::kImplausibleTurnDeg * kRadPerDeg) {
+      align_.reject_turn(s);
+      continue;
+    }
     if (replaces(a.facing, facing[s])) {
-      align_.set_facing(s, facing[s]);
+      const bool was_known = a.facing.known();
+      const double change_rad = align_.set_facing(s, facing[s]);
       heading_.stop(s);  // its heading follows the facing now, not a fit
       refine_[s] = false;
+      if (!was_known || std::abs(change_rad) > kRefitDeg * kRadPerDeg) refit_against(s);
     }
     shared[s] = !a.own_frame;
     source = facing[s].source;
@@ -351,24 +365,28 @@ std::array<bool, kSegmentCount> BodyTracker::own_heading_frames() const {
   return own;
 }
 
+bool BodyTracker::heading_known(int s, const std::array<bool, kSegmentCount>& own) const {
+  // Known when its sensor shares the earth frame (magnetometer) or was aligned from its own
+  // facing.
+  return skeleton_.rig().tracked(s) && (!own[s] || align_.segment(s).facing.known());
+}
+
+int BodyTracker::known_above(int s, const std::array<bool, kSegmentCount>& own) const {
+  int p = kSegmentParent[s];
+  while (p >= 0 && !heading_known(p, own))
+    p = kSegmentParent[p];
+  return p;
+}
+
 void BodyTracker::start_heading_from_motion() {
   std::array<int, kSegmentCount> reference;
   reference.fill(-1);
   const RigMapping& rig = skeleton_.rig();
   const std::array<bool, kSegmentCount> own = own_heading_frames();
-  // A segment's heading is known when its sensor shares the earth frame (magnetometer) or was
-  // aligned from its own facing; the others are fitted to the nearest known one above.
-  const auto facing_known = [&](int s) { return align_.segment(s).facing.known(); };
-  const auto known = [&](int s) { return rig.tracked(s) && (!own[s] || facing_known(s)); };
-  const auto known_above = [&](int s) {
-    int p = kSegmentParent[s];
-    while (p >= 0 && !known(p))
-      p = kSegmentParent[p];
-    return p;
-  };
+  // The segments whose heading is not known are fitted to the nearest known one above.
   if (opt_.calibration.heading == HeadingSource::mount_normals)
     for (int s = 0; s < kSegmentCount; ++s)
-      if (rig.tracked(s) && !known(s)) reference[s] = known_above(s);
+      if (rig.tracked(s) && !heading_known(s, own)) reference[s] = known_above(s, own);
   // Segments aligned from their own horizontal site normal are refined against the same
   // evidence, within a band (a strap tilted off the normal turns that alignment). Not the upper
   // arms: the shoulder girdle moves on the torso, which the model holds rigid, so the shoulder's
@@ -378,48 +396,70 @@ void BodyTracker::start_heading_from_motion() {
   if (opt_.heading_from_motion.refine_max_deg > 0 &&
       opt_.calibration.heading == HeadingSource::mount_normals)
     for (int s = 0; s < kSegmentCount; ++s) {
-      if (!known(s) || !own[s] || align_.segment(s).facing.source != AlignSource::site_normal)
+      if (!heading_known(s, own) || !own[s] ||
+          align_.segment(s).facing.source != AlignSource::site_normal)
         continue;
       if (s == index(Segment::upper_arm_l) || s == index(Segment::upper_arm_r)) continue;
-      reference[s] = known_above(s);
+      reference[s] = known_above(s, own);
       refine_[s] = reference[s] >= 0;
     }
   heading_.reset(reference);
-  const CalibrationPose pose = align_.calibration().pose;
+  for (int s = 0; s < kSegmentCount; ++s)
+    set_up_fit(s, reference[s]);
+  heading_found_ = refine_;  // a refined segment starts aligned
+}
+
+void BodyTracker::set_up_fit(int s, int ref) {
   // Joint accelerations pair a segment with its parent or, through the neck (never tracked,
   // short and stiff: held in its calibration pose), the head with the torso; further up (a
   // foot under an untracked shank) the knee's own motion would dominate: rates instead.
+  acc_reference_[s] = false;
+  own_band_[s] = {};
+  ref_band_[s] = {};
+  const int p = kSegmentParent[s];
+  if (ref < 0 || p < 0) return;
+  if (ref != p && !(p == index(Segment::neck) && ref == kSegmentParent[p])) return;
+  acc_reference_[s] = true;
+  const CalibrationPose pose = align_.calibration().pose;
   const BodyModel& model = skeleton_.model();
-  for (int s = 0; s < kSegmentCount; ++s) {
-    acc_reference_[s] = false;
-    const int p = kSegmentParent[s];
-    if (reference[s] < 0 || p < 0) continue;
-    const int ref = reference[s];
-    if (ref != p && !(p == index(Segment::neck) && ref == kSegmentParent[p])) continue;
-    acc_reference_[s] = true;
-    // The joint (s's origin) in the reference's frame.
-    Eigen::Vector3d joint_m = model.joint_offset_m(s);
-    if (ref != p)
-      joint_m = model.joint_offset_m(p) + q_body_segment_in_pose(pose, ref).conjugate() *
-                                              (q_body_segment_in_pose(pose, p) * joint_m);
-    // The own lever arm: whole where the mounting is known from the N-pose (a refined
-    // segment), else only its part along the site normal.
-    const Eigen::Vector3d site_m =
-        standard_site_position_m(static_cast<Segment>(s), model.dimensions());
-    const Eigen::Vector3d n = standard_site_normal_body(static_cast<Segment>(s));
-    own_joint_m_[s] = refine_[s] ? Eigen::Vector3d(-site_m) : Eigen::Vector3d(-n.dot(site_m) * n);
-    joint_in_reference_m_[s] =
-        joint_m - standard_site_position_m(static_cast<Segment>(ref), model.dimensions());
+  // The joint (s's origin) in the reference's frame.
+  Eigen::Vector3d joint_m = model.joint_offset_m(s);
+  if (ref != p)
+    joint_m = model.joint_offset_m(p) + q_body_segment_in_pose(pose, ref).conjugate() *
+                                            (q_body_segment_in_pose(pose, p) * joint_m);
+  // The own lever arm: whole where the mounting is known from the N-pose (a refined
+  // segment), else only its part along the site normal.
+  const Eigen::Vector3d site_m =
+      standard_site_position_m(static_cast<Segment>(s), model.dimensions());
+  const Eigen::Vector3d n = standard_site_normal_body(static_cast<Segment>(s));
+  own_joint_m_[s] = refine_[s] ? Eigen::Vector3d(-site_m) : Eigen::Vector3d(-n.dot(site_m) * n);
+  joint_in_reference_m_[s] =
+      joint_m - standard_site_position_m(static_cast<Segment>(ref), model.dimensions());
+}
+
+void BodyTracker::refit_against(int s) {
+  // Segment s got its facing or turned: each fit against s, or against a segment above s (s
+  // was not known), was matched to what is no longer so. It starts over against the nearest
+  // known segment above it now, and its first new estimate aligns it.
+  const std::array<bool, kSegmentCount> own = own_heading_frames();
+  for (int t = 0; t < kSegmentCount; ++t) {
+    const int ref = heading_.reference(t);
+    if (t == s || ref < 0 || refine_[t]) continue;
+    bool below = false;
+    for (int p = kSegmentParent[t]; p >= 0 && !below; p = kSegmentParent[p])
+      below = p == s;
+    if (!below) continue;
+    const int next = known_above(t, own);
+    if (ref != s && next == ref) continue;
+    heading_.restart(t, next);
+    set_up_fit(t, next);
+    heading_found_[t] = false;
   }
-  own_band_.fill({});
-  ref_band_.fill({});
-  heading_found_ = refine_;  // a refined segment starts aligned
 }
 
 void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   constexpr int64_t kEveryNs = 100'000'000;  // 10 Hz: the alignment is a slow constant
   constexpr double kMinTurnRad = 0.1 * kRadPerDeg;
-  constexpr double kImplausibleTurnDeg = 45.0;
   if (t_ns - heading_applied_t_ns_ < kEveryNs) return;
   const double max_turn_rad =
       opt_.heading_from_motion.max_drift_deg_s * kRadPerDeg * static_cast<double>(kEveryNs) * 1e-9;
@@ -440,7 +480,7 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
     // 6D heading, so a stretch of misleading motion cannot turn it over, and evidence far off a
     // found alignment (a flip) is refused and reported.
     if (heading_found_[s]) {
-      if (std::abs(yaw) > kImplausibleTurnDeg * kRadPerDeg) {
+      if (std::abs(yaw) > Alignment::kImplausibleTurnDeg * kRadPerDeg) {
         align_.reject_turn(s);
         continue;
       }

@@ -18,6 +18,16 @@ void HeadingFromMotion::reset(const std::array<int, kSegmentCount>& reference) {
   }
 }
 
+void HeadingFromMotion::restart(int seg, int reference) {
+  if (seg < 0 || seg >= kSegmentCount) return;
+  ref_[seg] = reference;
+  active_ = active_ || reference >= 0;
+  have_[seg] = false;
+  have_ref_[seg] = false;
+  sum_[seg].setZero();
+  evidence_[seg] = 0;
+}
+
 void HeadingFromMotion::add_reference(int seg, const Eigen::Vector3d& v, int64_t t_ns) {
   if (seg < 0 || seg >= kSegmentCount || ref_[seg] < 0 || !v.allFinite()) return;
   ref_v_[seg] = v.head<2>();

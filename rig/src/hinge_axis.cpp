@@ -16,6 +16,9 @@ namespace {
 constexpr double kResidualFloor = 0.01;
 /// Residuals (soft tissue, the joint's own play) stay correlated about this long.
 constexpr double kCorrelationS = 0.5;
+// One axis flipped alone must fit this many times worse than the fit for the fit to fix the
+// axes' relative sign.
+constexpr double kRelativeSignRatio = 4.0;
 
 /// Smallest curvature of j^T s j across the unit vector j (the flattest way to turn it).
 double least_curvature(const Eigen::Matrix3d& s, const Eigen::Vector3d& j) {
@@ -110,13 +113,19 @@ void HingeAxisEstimator::solve() {
       180.0, std::sqrt(var / (std::max(std::min(k1, k2), 1e-12) * independent)) * kDegPerRad);
   j1_ = j1;
   j2_ = j2;
-  choose_signs();
+  // The fit fixes the axes' relative sign where the axis' elevation varied: one axis flipped
+  // alone then fits clearly worse. Where it stayed level it fits as well, and only the
+  // flexing side can tell.
+  xs.head<3>() = -j1;
+  const double flipped2 = std::max(xs.dot(normal_ * xs), 0.0) / weight_;
+  choose_signs(flipped2 > kRelativeSignRatio * var);
   known_ = updated_ = true;
 }
 
-void HingeAxisEstimator::choose_signs() {
+void HingeAxisEstimator::choose_signs(bool relative_sign_known) {
   // The pair of signs whose joint angle since the straight calibration pose stays on the
-  // flexing side in most recent samples.
+  // flexing side in most recent samples (both flipped together only, where the fit fixed the
+  // relative sign).
   const double lo = -kOvershootDeg * kRadPerDeg, hi = kMaxFlexDeg * kRadPerDeg;
   std::array<int, 4> on_side{};
   const std::array<std::array<double, 2>, 4> signs = {{{1, 1}, {1, -1}, {-1, 1}, {-1, -1}}};
@@ -124,6 +133,7 @@ void HingeAxisEstimator::choose_signs() {
     const Entry& e = ring_[static_cast<size_t>(k)];
     const double a1 = e.i1.dot(j1_), a2 = e.i2.dot(j2_);
     for (size_t c = 0; c < 4; ++c) {
+      if (relative_sign_known && signs[c][0] != signs[c][1]) continue;
       const double theta = flex_sign_ * (signs[c][1] * a2 - signs[c][0] * a1);
       on_side[c] += theta >= lo && theta <= hi;
     }

@@ -50,6 +50,10 @@ struct SegmentAlignment {
 
 class Alignment {
  public:
+  /// A running estimate from motion that would turn a found alignment by more than this is a
+  /// flip or misleading motion, never a strap that moved: refused (reject_turn).
+  static constexpr double kImplausibleTurnDeg = 45.0;
+
   Alignment();
 
   /// A calibration from a capture: every segment with a sensor gets its mounting tilt from the

@@ -8,9 +8,13 @@
 //      field turns (local_field_watch.hpp),
 //   4. the calibration capture (pose_capture.hpp) and, when it completes, the calibration
 //      (calibrate.hpp) into the segments' alignment,
-//   5. in 6D, the heading alignment from motion of the sensors whose facing the calibration
-//      could not give (heading_from_motion.hpp),
-//   6. the skeleton's input (orientation and flags);
+//   5. mounting from motion: the mounting motion's window after an N-pose (mounting_motion.hpp)
+//      and the knees' and elbows' hinge axes from any motion (hinge_axis.hpp), each giving
+//      facings that replace assumed ones (facing.hpp: replaces); a segment that gets its facing
+//      restarts the fits below it,
+//   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
+//      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted,
+//   7. the skeleton's input (orientation and flags);
 // and per frame the skeleton solve (each segment holds its sensor's newest orientation).
 //
 // Each segment's alignment (mounting and heading, with the source and sigma of each) has one
@@ -179,6 +183,15 @@ class BodyTracker {
                                 const Eigen::Vector3d& gyro_bias_rad_s);
   /// Fits the segments whose facing is unknown (and refines those from a site normal).
   void start_heading_from_motion();
+  /// Whether segment s's heading is known (shares the earth frame, or has a facing).
+  bool heading_known(int s, const std::array<bool, kSegmentCount>& own) const;
+  /// The nearest segment above s whose heading is known; -1 if none.
+  int known_above(int s, const std::array<bool, kSegmentCount>& own) const;
+  /// Segment s's fit against `ref`: acceleration pairing or rates, the lever arms.
+  void set_up_fit(int s, int ref);
+  /// Segment s got a facing or turned: the fits below it start over against the nearest
+  /// known segment above them.
+  void refit_against(int s);
   /// Facings found from motion: each replaces a held one where replaces() says so; those of
   /// sensors sharing the earth frame vote on the body heading.
   void apply_facings(const std::array<Facing, kSegmentCount>& facing);

@@ -60,6 +60,9 @@ class HeadingFromMotion {
   bool estimate(int segment, double& yaw_rad) const;
   /// The caller turned the segment's alignment by yaw_rad: the fit continues in the new frame.
   void applied(int segment, double yaw_rad);
+  /// Segment s's evidence is dropped and its fit starts over against `reference` (the
+  /// reference's alignment changed, or a nearer one became known).
+  void restart(int segment, int reference);
   /// Segment s is no longer fitted (another source holds its heading).
   void stop(int segment) {
     if (segment >= 0 && segment < kSegmentCount) ref_[segment] = -1;

@@ -67,7 +67,7 @@ class HingeAxisEstimator {
     Eigen::Vector3d i1, i2;  ///< rates integrated since reset
   };
   void solve();
-  void choose_signs();
+  void choose_signs(bool relative_sign_known);
 
   int flex_sign_;
   std::vector<Entry> ring_;

@@ -1,0 +1,87 @@
+// Regression on real straps without a magnetometer: the real 6D full-body run
+// (../shared/datasets/qmt-fullbody: 16 IMUs as a lab strapped them, running and jumping)
+// replayed as `mocap replay --calibrate npose@2 --set filter.use_mag=false` does, through the
+// replay engine mocapd runs. A real knee stays near its hinge: each knee's rotation off its
+// flexion axis (scripts/qmt-knees prints the same figure); and no segment flips once its
+// alignment is found (the first estimates from motion change it at most once each).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/core/units.hpp"
+#include "mocap/daemon/replay.hpp"
+#include "mocap/daemon/replay_run.hpp"
+
+namespace mocap::daemon {
+namespace {
+
+struct KneeFrames final : FrameSink {
+  std::vector<PoseFrame> f;
+  void publish(const PoseFrame& frame) override { f.push_back(frame); }
+};
+
+Eigen::Quaterniond quat(const std::array<float, 4>& q) {
+  return {q[0], q[1], q[2], q[3]};
+}
+
+/// The joint rotation's angle left after its twist about the upper segment's left (y) axis.
+double off_hinge_deg(const Eigen::Quaterniond& q) {
+  const double n = std::hypot(q.w(), q.y());
+  if (n < 1e-9) return 180;
+  const Eigen::Quaterniond twist(q.w() / n, 0, q.y() / n, 0);
+  const Eigen::Quaterniond swing = q * twist.conjugate();
+  return 2 * std::acos(std::min(1.0, std::abs(swing.w()))) * kDegPerRad;
+}
+
+TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
+  const std::string path =
+      std::string(MOCAP_SHARED_DIR) + "/datasets/qmt-fullbody/fullbody_run.csv.gz";
+  auto src = open_sample_source(path, nullptr);
+  ReplayRun run(replay_config(*src, false, {"filter.use_mag=false"}, path), *src, path, false);
+  KneeFrames frames;
+  run.core.add_sink(&frames);
+  ReplayOptions opt;
+  opt.calibrate_pose = CalibrationPose::npose;
+  opt.calibrate_at_s = 2.0;
+  run_replay(*src, run.core, opt);
+  ASSERT_TRUE(run.engine.skeleton().calibration().valid) << run.engine.last_calibration_message();
+  ASSERT_GT(frames.f.size(), 9000u);
+  const int64_t t0 = frames.f.front().t_ns;
+  double sum2[2] = {0, 0};
+  int n = 0;
+  // Per segment: frame-to-frame turns over 45 deg after the still start (an alignment found from
+  // motion moves a segment once; a flip would add more).
+  std::array<int, kSegmentCount> big_turns{};
+  for (size_t k = 1; k < frames.f.size(); ++k) {
+    const PoseFrame& fr = frames.f[k];
+    if (fr.t_ns - t0 < 5'000'000'000) continue;
+    int side = 0;
+    for (Segment shank : {Segment::shank_l, Segment::shank_r}) {
+      const double off = off_hinge_deg(quat(fr.q_parent_segment[index(shank)]));
+      sum2[side++] += off * off;
+    }
+    ++n;
+    for (int s = 0; s < kSegmentCount; ++s) {
+      const Eigen::Quaterniond a = quat(frames.f[k - 1].q_earth_segment[s]);
+      const Eigen::Quaterniond b = quat(fr.q_earth_segment[s]);
+      if (a.angularDistance(b) > 45 * kRadPerDeg) ++big_turns[s];
+    }
+  }
+  const double left = std::sqrt(sum2[0] / n), right = std::sqrt(sum2[1] / n);
+  RecordProperty("knee_l_off_axis_deg", std::to_string(left));
+  RecordProperty("knee_r_off_axis_deg", std::to_string(right));
+  // Measured 15.0 / 21.5 deg (36.5 / 40.1 at the start of issue 28's work, where the straps were
+  // taken to be on our standard sites; the goal of 8 is not met: docs/accuracy.md).
+  EXPECT_LT(left, 17.0);
+  EXPECT_LT(right, 23.5);
+  for (int s = 0; s < kSegmentCount; ++s)
+    EXPECT_LE(big_turns[s], 1) << kSegmentNames[s];
+}
+
+}  // namespace
+}  // namespace mocap::daemon

@@ -1,0 +1,110 @@
+// The knee's and elbow's flexion axis from the two segments' inclinations
+// (rig/hinge_axis.hpp): a synthetic leg and arm with sensors strapped at random orientations,
+// each sensor's filter frame at a heading of its own (6D), must give each sensor's axis (the
+// segment's left axis in the sensor's frame) with the sign pointing left.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+
+#include "mocap/core/units.hpp"
+#include "mocap/rig/hinge_axis.hpp"
+
+namespace mocap::rig {
+namespace {
+
+Eigen::Quaterniond rot(double angle_rad, const Eigen::Vector3d& axis) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle_rad, axis.normalized()));
+}
+
+Eigen::Quaterniond random_rotation(std::mt19937& rng) {
+  std::normal_distribution<double> n(0, 1);
+  Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
+  return q.normalized();
+}
+
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) / kRadPerDeg;
+}
+
+/// The rate of a sensor (own frame) between two orientations dt apart.
+Eigen::Vector3d rate_rad_s(const Eigen::Quaterniond& q0, const Eigen::Quaterniond& q1, double dt) {
+  const Eigen::AngleAxisd d(q0.conjugate() * q1);
+  return d.axis() * d.angle() / dt;
+}
+
+struct Limb {
+  Eigen::Quaterniond q_seg_sensor1, q_seg_sensor2;  ///< the straps
+  Eigen::Quaterniond q_frame1, q_frame2;            ///< each filter's heading frame
+};
+
+/// Runs `seconds` of a limb whose upper segment swings (flexion, abduction, turns of the body)
+/// and whose hinge flexes one way by flex_sign from straight; returns the estimator.
+HingeAxisEstimator run_limb(const Limb& limb, int flex_sign, double seconds) {
+  HingeAxisEstimator est(flex_sign);
+  constexpr double kRateHz = 100;
+  constexpr double dt = 1.0 / kRateHz;
+  const int64_t t0_ns = 1'000'000'000;
+  est.reset(t0_ns);
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY(),
+                        z = Eigen::Vector3d::UnitZ();
+  auto segs = [&](double t, Eigen::Quaterniond& q1, Eigen::Quaterniond& q2) {
+    // The body turns slowly; the upper segment swings forward and back (a stride or an arm
+    // swing) with a little abduction; the hinge bends from straight on its flexing side.
+    const double yaw = 0.6 * std::sin(0.13 * t);
+    const double swing = 0.5 * std::sin(2.0 * t);
+    const double abduct = 0.25 * std::sin(0.7 * t + 0.4);
+    const double flex = 0.6 * (1 - std::cos(2.0 * t + 0.9)) + 0.3 * (1 - std::cos(0.31 * t));
+    q1 = rot(yaw, z) * rot(abduct, x) * rot(-swing, y);
+    q2 = q1 * rot(flex_sign * flex, y);
+  };
+  Eigen::Quaterniond p1, p2;
+  segs(0, p1, p2);
+  for (int n = 1; n <= static_cast<int>(seconds * kRateHz); ++n) {
+    const double t = n * dt;
+    Eigen::Quaterniond s1, s2;
+    segs(t, s1, s2);
+    const Eigen::Quaterniond a1 = p1 * limb.q_seg_sensor1, b1 = s1 * limb.q_seg_sensor1;
+    const Eigen::Quaterniond a2 = p2 * limb.q_seg_sensor2, b2 = s2 * limb.q_seg_sensor2;
+    est.add(limb.q_frame1 * b1, limb.q_frame2 * b2, rate_rad_s(a1, b1, dt), rate_rad_s(a2, b2, dt),
+            t0_ns + static_cast<int64_t>(t * 1e9));
+    p1 = s1;
+    p2 = s2;
+  }
+  return est;
+}
+
+TEST(HingeAxisEstimator, FindsEachSensorsAxisForAnyStrapAndHeading) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> yaw(-M_PI, M_PI);
+  for (int flex_sign : {1, -1})
+    for (int trial = 0; trial < 5; ++trial) {
+      Limb limb{random_rotation(rng), random_rotation(rng), rot(yaw(rng), Eigen::Vector3d::UnitZ()),
+                rot(yaw(rng), Eigen::Vector3d::UnitZ())};
+      HingeAxisEstimator est = run_limb(limb, flex_sign, 40);
+      ASSERT_TRUE(est.known()) << "trial " << trial;
+      // The segment's left axis in each sensor's frame.
+      const Eigen::Vector3d j1 = limb.q_seg_sensor1.conjugate() * Eigen::Vector3d::UnitY();
+      const Eigen::Vector3d j2 = limb.q_seg_sensor2.conjugate() * Eigen::Vector3d::UnitY();
+      EXPECT_LT(angle_deg(est.axis1(), j1), 2.0) << "flex " << flex_sign << " trial " << trial;
+      EXPECT_LT(angle_deg(est.axis2(), j2), 2.0) << "flex " << flex_sign << " trial " << trial;
+      EXPECT_GT(est.sign_agreement(), 0.9);
+      EXPECT_LT(est.sigma_deg(), 5.0);
+    }
+}
+
+TEST(HingeAxisEstimator, NoAnswerWithoutTilt) {
+  // Standing still: nothing tilts, no axis can be told.
+  std::mt19937 rng(3);
+  HingeAxisEstimator est(1);
+  est.reset(1);
+  const Eigen::Quaterniond q1 = random_rotation(rng), q2 = random_rotation(rng);
+  for (int n = 1; n < 6000; ++n)
+    est.add(q1, q2, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 1 + n * 10'000'000LL);
+  EXPECT_FALSE(est.known());
+  EXPECT_FALSE(est.updated());
+}
+
+}  // namespace
+}  // namespace mocap::rig
