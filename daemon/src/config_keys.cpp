@@ -3,9 +3,9 @@
 // it and `mocapd --print-config-reference` writes docs/configuration.md's key reference from it
 // (tests/daemon/test_config_keys.cpp checks the committed doc matches).
 //
-// Adding a key is one table entry: give the section struct in mocap/daemon/config.hpp its
-// member with its default (the default lives there, and only there), then add an entry to the
-// section's table below, e.g.
+// Adding a key is one table entry: give the section struct in mocap/daemon/config.hpp (an
+// output's section: mocap/outputs/outputs_config.hpp) its member with its default (the default
+// lives there, and only there), then add an entry to the section's table below, e.g.
 //     {.name = "port", .at = AT(port), .lo = 1, .hi = 65535, .help = "UDP port"},
 // The member's type is the key's type (bool, int, uint64_t, double, std::string, an enum with
 // `.choices`, an optional triple, a list of segment names); `.lo`/`.hi` are its range, `.unit`

@@ -1,7 +1,6 @@
 // Daemon assembly: devices feed the pipeline, the pipeline feeds the outputs, the control
 // socket drives commands and reports status as JSON.
 #include "mocap/daemon/daemon.hpp"
-#include "mocap/daemon/outputs.hpp"
 
 #include <poll.h>
 
@@ -12,6 +11,7 @@
 
 #include "mocap/core/segments.hpp"
 #include "mocap/core/time.hpp"
+#include "mocap/outputs/json_stream.hpp"
 #include "mocap/rig/body_tracker.hpp"
 
 namespace mocap::daemon {
@@ -221,7 +221,7 @@ std::string Daemon::handle(const ControlRequest& r) {
       std::lock_guard lock(rec_mu_);
       if (!recording_path_.empty())
         return control_error_reply("already recording to " + recording_path_);
-      RecordTap* tap = parts_.recorder->start(r.argument, r.unique);
+      outputs::RecordTap* tap = parts_.recorder->start(r.argument, r.unique);
       pipeline_->set_record_tap(tap);
       pipeline_->set_frame_flag(kFrameRecording, true);
       recording_path_ = parts_.recorder->path();
@@ -233,7 +233,7 @@ std::string Daemon::handle(const ControlRequest& r) {
       std::lock_guard lock(rec_mu_);
       if (recording_path_.empty() || !parts_.recorder) return control_error_reply("not recording");
       pipeline_->set_record_tap(nullptr);
-      const RecordingSummary sum = parts_.recorder->stop();
+      const outputs::RecordingSummary sum = parts_.recorder->stop();
       pipeline_->set_frame_flag(kFrameRecording, false);
       ok["file"] = recording_path_;
       ok["duration_s"] = std::round(sum.duration_s * 1000) / 1000;
@@ -322,9 +322,10 @@ std::string Daemon::status_json() const {
     // the control socket.
     const OutputsConfig& o = cfg_.outputs;
     nlohmann::json streams;
-    streams["json"] = {{"enabled", o.json.enabled},
-                       {"bind", o.json.bind},
-                       {"port", o.json.enabled ? json_stream_port(parts_.sinks) : o.json.port}};
+    streams["json"] = {
+        {"enabled", o.json.enabled},
+        {"bind", o.json.bind},
+        {"port", o.json.enabled ? outputs::json_stream_port(parts_.sinks) : o.json.port}};
     streams["vmc"] = {{"enabled", o.vmc.enabled}, {"host", o.vmc.host}, {"port", o.vmc.port}};
     streams["vrchat"] = {
         {"enabled", o.vrchat.enabled}, {"host", o.vrchat.host}, {"port", o.vrchat.port}};

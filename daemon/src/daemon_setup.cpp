@@ -5,14 +5,47 @@
 
 #include <poll.h>
 
+#include <ctime>
+
+#include "mocap/core/segments.hpp"
+#include "mocap/core/time.hpp"
 #include "mocap/daemon/demo.hpp"
-#include "mocap/daemon/outputs.hpp"
-#include "mocap/daemon/recorder.hpp"
 #include "mocap/daemon/replay_run.hpp"
 #include "mocap/daemon/rig_engine.hpp"
+#include "mocap/outputs/recorder.hpp"
+#include "mocap/outputs/registry.hpp"
 #include "mocap/skeleton/calibration.hpp"
 
 namespace mocap::daemon {
+
+namespace {
+/// The session header for a config: its effective TOML, the sensor descriptions, the start times.
+session::SessionHeader session_header(const Config& cfg, std::string calibration_text) {
+  session::SessionHeader h;
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  h.t_start_unix_ns = static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  h.t_start_host_ns = monotonic_ns();
+  h.config_text = config_to_toml(cfg);
+  h.calibration_text = std::move(calibration_text);
+  for (size_t i = 0; i < cfg.sensors.size(); ++i) {
+    session::SensorDescription d;
+    d.name = cfg.sensors[i].name;
+    d.protocol = cfg.sensors[i].driver;
+    if (auto seg = segment_from_name(cfg.sensors[i].segment)) d.segment = index(*seg);
+    d.device_index = static_cast<uint16_t>(i);
+    h.sensors.push_back(d);
+  }
+  return h;
+}
+
+/// The enabled outputs of a config, from the outputs' registry (started).
+std::vector<std::unique_ptr<outputs::Output>> make_outputs(const Config& cfg, Logger& log) {
+  return outputs::make_outputs(cfg.outputs, {.realtime_priority = cfg.pipeline.realtime_priority,
+                                             .model_height_m = cfg.body.model.height_m,
+                                             .log = &log});
+}
+}  // namespace
 
 LiveSetup make_live(const Config& given, bool demo, Logger& log) {
   LiveSetup live{given, {}};
@@ -36,15 +69,17 @@ LiveSetup make_live(const Config& given, bool demo, Logger& log) {
   // The calibration text is read on the control thread while the pipeline may change it: the
   // recorder stores the calibration file's content when there is one.
   const std::string calib_file = cfg.calibration.file;
-  parts.recorder = std::make_unique<SessionRecorder>(
-      cfg,
-      [calib_file]() -> std::string {
-        if (calib_file.empty()) return {};
-        try {
-          return serialize_calibration(load_calibration(calib_file));
-        } catch (const std::exception&) {
-          return {};
+  parts.recorder = std::make_unique<outputs::SessionRecorder>(
+      cfg.recording,
+      [cfg, calib_file]() {
+        std::string calibration_text;
+        if (!calib_file.empty()) {
+          try {
+            calibration_text = serialize_calibration(load_calibration(calib_file));
+          } catch (const std::exception&) {
+          }
         }
+        return session_header(cfg, std::move(calibration_text));
       },
       log.child("recorder", log.level()));
   return live;

@@ -72,7 +72,7 @@ void Pipeline::on_sample(const ImuSample& sample) {
 }
 
 void Pipeline::on_raw(uint16_t device_index, int64_t t_host_ns, std::span<const uint8_t> bytes) {
-  with_tap([&](RecordTap& t) { t.on_raw(device_index, t_host_ns, bytes); });
+  with_tap([&](outputs::RecordTap& t) { t.on_raw(device_index, t_host_ns, bytes); });
 }
 
 void Pipeline::on_connection(uint16_t device_index, bool connected, std::string_view reason) {
@@ -119,7 +119,7 @@ void Pipeline::set_frame_flag(uint32_t flag, bool on) {
   wake_.notify();
 }
 
-void Pipeline::set_record_tap(RecordTap* tap) {
+void Pipeline::set_record_tap(outputs::RecordTap* tap) {
   tap_.store(tap);
   // Wait for callers that may still hold the previous tap.
   while (tap_users_.load() != 0)
@@ -156,8 +156,8 @@ uint64_t Pipeline::ring_drops() const {
   return n;
 }
 
-void Pipeline::TapSink::publish(const PoseFrame& f) {
-  p_.with_tap([&](RecordTap& t) { t.on_frame(f); });
+void Pipeline::TapSink::on_frame(const PoseFrame& f) {
+  p_.with_tap([&](outputs::RecordTap& t) { t.on_frame(f); });
 }
 
 void Pipeline::apply_commands(int64_t now_ns) {
@@ -203,7 +203,7 @@ void Pipeline::drain() {
     }
     if (best < 0) break;
     const ImuSample& s = scratch_[best][scratch_pos_[best]++];
-    with_tap([&](RecordTap& t) { t.on_sample(s); });
+    with_tap([&](outputs::RecordTap& t) { t.on_sample(s); });
     core_.process(s);
   }
 }

@@ -32,7 +32,7 @@ PipelineCore::PipelineCore(const PipelineConfig& cfg, const CalibrationConfig& c
   sinks_.reserve(8);
 }
 
-void PipelineCore::remove_sink(FrameSink* sink) {
+void PipelineCore::remove_sink(outputs::Output* sink) {
   sinks_.erase(std::remove(sinks_.begin(), sinks_.end(), sink), sinks_.end());
 }
 
@@ -209,8 +209,8 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
     st.t_device_ns = h.t_device_ns;
     if (sensors_[i].segment >= 0 && !h.live) frame_.segment_flags[sensors_[i].segment] |= kSegStale;
   }
-  for (FrameSink* s : sinks_)
-    s->publish(frame_);
+  for (outputs::Output* s : sinks_)
+    s->on_frame(frame_);
 }
 
 }  // namespace mocap::daemon

@@ -17,10 +17,10 @@ using namespace mocap::daemon;
 
 namespace {
 
-struct CollectSink final : FrameSink {
+struct CollectSink final : mocap::outputs::Output {
   std::mutex mu;
   std::vector<PoseFrame> frames;
-  void publish(const PoseFrame& f) override {
+  void on_frame(const PoseFrame& f) override {
     std::lock_guard l(mu);
     frames.push_back(f);
   }
@@ -211,7 +211,7 @@ TEST(Pipeline, LiveThreadsDeliverFramesAndCountDrops) {
     p.on_sample(sample(1, 1 + static_cast<int64_t>(k)));
   EXPECT_EQ(p.ring_drops(), 10u);
 
-  struct Tap final : RecordTap {
+  struct Tap final : mocap::outputs::RecordTap {
     std::atomic<int> raw{0}, samples{0}, frames{0};
     void on_raw(uint16_t, int64_t, std::span<const uint8_t>) override { ++raw; }
     void on_sample(const ImuSample&) override { ++samples; }

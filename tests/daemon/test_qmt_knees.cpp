@@ -20,9 +20,9 @@
 namespace mocap::daemon {
 namespace {
 
-struct KneeFrames final : FrameSink {
+struct KneeFrames final : outputs::Output {
   std::vector<PoseFrame> f;
-  void publish(const PoseFrame& frame) override { f.push_back(frame); }
+  void on_frame(const PoseFrame& frame) override { f.push_back(frame); }
 };
 
 Eigen::Quaterniond quat(const std::array<float, 4>& q) {

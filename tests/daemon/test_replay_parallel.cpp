@@ -83,9 +83,9 @@ class StandInEngine final : public PoseEngine {
   int captures_ = 0;
 };
 
-struct Frames final : FrameSink {
+struct Frames final : mocap::outputs::Output {
   std::vector<PoseFrame> f;
-  void publish(const PoseFrame& frame) override { f.push_back(frame); }
+  void on_frame(const PoseFrame& frame) override { f.push_back(frame); }
 };
 
 std::vector<SensorInfo> five_sensors() {

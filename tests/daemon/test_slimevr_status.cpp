@@ -19,9 +19,9 @@ using namespace mocap::daemon;
 
 namespace {
 
-struct LastFrame final : FrameSink {
+struct LastFrame final : mocap::outputs::Output {
   PoseFrame frame;
-  void publish(const PoseFrame& f) override { frame = f; }
+  void on_frame(const PoseFrame& f) override { frame = f; }
 };
 
 ImuSample gyro_sample(uint16_t id, int64_t t_ns) {

@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "mocap/daemon/control.hpp"
-#include "mocap/daemon/json_stream.hpp"
+#include "mocap/outputs/json_stream.hpp"
 #include "mocap/viewer/control_client.hpp"
 #include "mocap/viewer/net_source.hpp"
 #include "mocap/viewer/pose_source.hpp"
@@ -41,7 +41,7 @@ TEST(ViewerWithDaemon, CalibrationAndHeadingResetReachTheControlServer) {
 }
 
 TEST(ViewerWithDaemon, ConnectSourceShowsTheStreamedPose) {
-  daemon::PoseJsonServer server;
+  outputs::PoseJsonServer server;
   std::string err;
   ASSERT_TRUE(server.start({}, &err)) << err;
   NetSource src("127.0.0.1:" + std::to_string(server.port()));

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "mocap/daemon/control.hpp"
-#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/outputs/posture_shm.hpp"
 
 extern char** environ;
 
@@ -74,7 +74,7 @@ TEST(InteractiveViewer, KeysReachTheDaemonAndQQuits) {
       },
       Logger(sink, "test", LogLevel::warn));
   // A live source: the shared posture, as a daemon writes it.
-  PostureWriter posture("/mocap-viewer-keys-" + tag);
+  outputs::PostureWriter posture("/mocap-viewer-keys-" + tag);
   PoseFrame f;
   reset_pose(f);
   for (auto& p : f.p_earth_segment_m)

@@ -9,9 +9,9 @@
 #include <cstring>
 #include <string>
 
+#include "mocap/outputs/posture_shm.hpp"
 #include "mocap/session/session_writer.hpp"
 #include "mocap/skeleton/bvh.hpp"
-#include "mocap/skeleton/posture_shm.hpp"
 #include "mocap/viewer/avatar_geometry.hpp"
 #include "mocap/viewer/camera.hpp"
 #include "mocap/viewer/png_io.hpp"
@@ -29,7 +29,7 @@ class Render : public ::testing::Test {
     if (!std::getenv("DISPLAY")) GTEST_SKIP() << "needs a display: run under xvfb-run";
     shm_ = "/mocap-viewer-render-" + std::to_string(getpid());
     png_ = "/tmp/mocap-viewer-render-" + std::to_string(getpid()) + ".png";
-    writer_ = std::make_unique<PostureWriter>(shm_);
+    writer_ = std::make_unique<outputs::PostureWriter>(shm_);
   }
   void TearDown() override { std::remove(png_.c_str()); }
 
@@ -55,7 +55,7 @@ class Render : public ::testing::Test {
   }
 
   std::string shm_, png_;
-  std::unique_ptr<PostureWriter> writer_;
+  std::unique_ptr<outputs::PostureWriter> writer_;
   BodyDimensions dims_ = body_dimensions_from_height(1.75);
   OrbitCamera camera_ = OrbitCamera::framing(1);
 };

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/outputs/posture_shm.hpp"
 #include "mocap/viewer/avatar_geometry.hpp"
 #include "mocap/viewer/camera.hpp"
 #include "mocap/viewer/shm_source.hpp"
@@ -99,7 +99,7 @@ TEST(ShmSource, WaitsForTheDaemonThenShowsItsNewestFrame) {
   EXPECT_FALSE(src.poll(0.0, frames));
   EXPECT_NE(src.status().find("WAITING"), std::string::npos);
 
-  auto writer = std::make_unique<PostureWriter>(name);
+  auto writer = std::make_unique<outputs::PostureWriter>(name);
   PoseFrame f = reference_pose(body_dimensions_from_height(1.7), Eigen::Vector3f(1, 2, 0));
   f.frame = 7;
   writer->publish(f);
@@ -117,7 +117,7 @@ TEST(ShmSource, WaitsForTheDaemonThenShowsItsNewestFrame) {
 
   // The daemon restarts: a new segment under the same name. The viewer maps it again.
   writer.reset();
-  auto restarted = std::make_unique<PostureWriter>(name);
+  auto restarted = std::make_unique<outputs::PostureWriter>(name);
   f.frame = 100;
   restarted->publish(f);
   double t = 0.9;

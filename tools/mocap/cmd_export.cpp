@@ -18,7 +18,7 @@
 #include "commands.hpp"
 #include "mocap/core/cli.hpp"
 #include "mocap/daemon/config.hpp"
-#include "mocap/daemon/json_stream.hpp"
+#include "mocap/outputs/pose_json.hpp"
 #include "mocap/session/session_reader.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/bvh.hpp"
@@ -172,7 +172,7 @@ enum class Format { csv, json, bvh, gltf, opensim };
 long write_json_lines(SessionReader& r, FinishedPoses& poses, const std::string& out) {
   std::FILE* f = std::fopen(out.c_str(), "w");
   if (!f) throw std::runtime_error("cannot create '" + out + "': " + std::strerror(errno));
-  std::vector<char> line(daemon::kPoseJsonMaxLine);
+  std::vector<char> line(outputs::kPoseJsonMaxLine);
   long frames = 0;
   bool ok = true;
   poses.run(r, [&](const PoseFrame& p) {
@@ -180,7 +180,7 @@ long write_json_lines(SessionReader& r, FinishedPoses& poses, const std::string&
     // The offset in force when the reader reached this pose (bridging delays a pose by at
     // most 0.5 s; the clock offset moves by microseconds over that).
     g.t_unix_ns = p.t_ns + r.unix_offset_ns();
-    const std::size_t n = daemon::format_pose_json(g, line.data(), line.size());
+    const std::size_t n = outputs::format_pose_json(g, line.data(), line.size());
     ok = n > 0 && std::fwrite(line.data(), 1, n, f) == n && ok;
     ++frames;
   });

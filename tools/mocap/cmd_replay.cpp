@@ -15,14 +15,12 @@
 #include "mocap/core/cli.hpp"
 #include "mocap/core/time.hpp"
 #include "mocap/daemon/daemon.hpp"
-#include "mocap/daemon/frame_writer_thread.hpp"
-#include "mocap/daemon/poses_csv.hpp"
 #include "mocap/daemon/prefetch_source.hpp"
 #include "mocap/daemon/replay_run.hpp"
 #include "mocap/daemon/rig_engine.hpp"
-#include "mocap/skeleton/body_model.hpp"
-#include "mocap/skeleton/bvh.hpp"
-#include "mocap/skeleton/dropout_bridge.hpp"
+#include "mocap/outputs/bvh_output.hpp"
+#include "mocap/outputs/frame_writer_thread.hpp"
+#include "mocap/outputs/poses_csv.hpp"
 #include "run_summary.hpp"
 
 namespace mocap::cmd {
@@ -30,36 +28,6 @@ namespace mocap::cmd {
 namespace {
 
 using namespace mocap::daemon;
-
-/// The replayed poses as BVH, a sensor's short dropouts bridged (as `mocap export` does).
-class BvhSink final : public FrameSink {
- public:
-  BvhSink(const std::string& path, const Config& cfg)
-      : bridge_(BodyModel(cfg.body.model).dimensions()) {
-    BvhWriterOptions o;
-    o.frame_time_s = 1.0 / cfg.pipeline.rate_hz;
-    writer_ = std::make_unique<BvhWriter>(path, BodyModel(cfg.body.model), o);
-  }
-  void publish(const PoseFrame& f) override {
-    bridge_.push(f);
-    drain();
-  }
-  void close() {
-    bridge_.finish();
-    drain();
-    writer_->close();
-  }
-  int frames() const { return writer_->frames(); }
-
- private:
-  void drain() {
-    while (bridge_.next(out_))
-      writer_->write_frame(out_);
-  }
-  DropoutBridge bridge_;
-  PoseFrame out_;
-  std::unique_ptr<BvhWriter> writer_;
-};
 
 bool parse_calibrate(const std::string& s, mocap::CalibrationPose& pose, bool& mounting,
                      double& at_s) {
@@ -128,17 +96,17 @@ int run_replay(const ReplayCommandOptions& o) {
     RigEngine& engine = run.engine;
     PipelineCore& core = run.core;
     // Each file is formatted and written on a thread of its own, frames in order.
-    std::unique_ptr<BvhSink> bvh;
-    std::unique_ptr<PosesCsvSink> poses;
-    std::unique_ptr<FrameWriterThread> bvh_thread, poses_thread;
+    std::unique_ptr<outputs::BvhOutput> bvh;
+    std::unique_ptr<outputs::PosesCsvSink> poses;
+    std::unique_ptr<outputs::FrameWriterThread> bvh_thread, poses_thread;
     if (!o.bvh.empty()) {
-      bvh = std::make_unique<BvhSink>(o.bvh, cfg);
-      bvh_thread = std::make_unique<FrameWriterThread>(*bvh);
+      bvh = std::make_unique<outputs::BvhOutput>(o.bvh, cfg.body.model, 1.0 / cfg.pipeline.rate_hz);
+      bvh_thread = std::make_unique<outputs::FrameWriterThread>(*bvh);
       core.add_sink(bvh_thread.get());
     }
     if (!csv_path.empty()) {
-      poses = std::make_unique<PosesCsvSink>(csv_path, 0);
-      poses_thread = std::make_unique<FrameWriterThread>(*poses);
+      poses = std::make_unique<outputs::PosesCsvSink>(csv_path, 0);
+      poses_thread = std::make_unique<outputs::FrameWriterThread>(*poses);
       core.add_sink(poses_thread.get());
     }
     const bool bar = !o.quiet && isatty(STDERR_FILENO);

@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <thread>
 
-#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/outputs/posture_shm.hpp"
 #include "mocap/viewer/gl_util.hpp"
 #include "mocap/viewer/offscreen.hpp"
 #include "mocap/viewer/synthetic_source.hpp"
@@ -82,8 +82,8 @@ FpsResult measure_fps(GLFWwindow* window, const ViewerOptions& o, int avatars, b
 /// copies (a viewer at 1000 frames/s).
 double publish_ns(const std::string& name, int n, bool with_reader, long& reads,
                   int reader_period_us = 0) {
-  PostureWriter writer(name);
-  PostureReader reader(name);
+  outputs::PostureWriter writer(name);
+  outputs::PostureReader reader(name);
   std::atomic<bool> stop{false};
   std::atomic<long> read_count{0};
   std::thread t;

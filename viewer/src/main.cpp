@@ -5,7 +5,7 @@
 #include <exception>
 
 #include "mocap/core/cli.hpp"
-#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/outputs/posture_shm.hpp"
 #include "mocap/viewer/bvh_source.hpp"
 #include "mocap/viewer/net_source.hpp"
 #include "mocap/viewer/session_source.hpp"
@@ -31,7 +31,7 @@ std::unique_ptr<PoseSource> make_source(const ViewerOptions& o) {
   const BodyDimensions dims = body_dimensions_from_height(o.height_m);
   if (o.source == "synthetic") return std::make_unique<SyntheticSource>(o.avatars, dims);
   if (o.source == "shm")
-    return std::make_unique<ShmSource>(o.shm_name.empty() ? default_posture_shm_name()
+    return std::make_unique<ShmSource>(o.shm_name.empty() ? outputs::default_posture_shm_name()
                                                           : o.shm_name);
   if (o.source == "connect") return std::make_unique<NetSource>(o.connect);
   if (o.source == "play") {

@@ -12,7 +12,7 @@ bool ShmSource::poll(double t_s, std::vector<PoseFrame>& frames) {
     if (t_s < next_try_s_) return false;
     next_try_s_ = t_s + 0.5;
     try {
-      reader_ = std::make_unique<PostureReader>(name_);
+      reader_ = std::make_unique<outputs::PostureReader>(name_);
       error_.clear();
     } catch (const std::exception& e) {
       error_ = e.what();

@@ -13,6 +13,7 @@
 
 #include "mocap/core/log.hpp"
 #include "mocap/filter/attitude_filter.hpp"
+#include "mocap/outputs/outputs_config.hpp"
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/calibration.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
@@ -93,56 +94,13 @@ struct PipelineConfig {
   double read_batch_ms = 4.0;
 };
 
-struct JsonOutputConfig {
-  bool enabled = true;
-  std::string bind = "127.0.0.1";
-  int port = 7301;
-  int max_clients = 32;  ///< further connections are closed at once
-  /// Private stream: serve it on this Unix socket (mode 0600, only the daemon's user) instead of
-  /// TCP (bind/port unused). "" = TCP.
-  std::string unix_socket;
-};
-
-struct VmcOutputConfig {
-  bool enabled = false;
-  std::string host = "127.0.0.1";
-  int port = 39539;
-};
-
-/// VRChat OSC trackers (docs/streaming.md section 3).
-struct VrchatOutputConfig {
-  bool enabled = false;
-  std::string host = "127.0.0.1";
-  int port = 9000;
-  /// Segment sent as tracker 1..8 (1 to 8 names; a slot named "" is not sent).
-  std::vector<std::string> trackers = {"pelvis",  "torso",   "foot_l",    "foot_r",
-                                       "shank_l", "shank_r", "forearm_l", "forearm_r"};
-  bool head = true;     ///< also send the head (/tracking/trackers/head/...) for alignment
-  double height_m = 0;  ///< the user's height as VRChat knows it; 0 = the body model's height
-};
-
-struct PostureOutputConfig {
-  bool enabled = true;
-  std::string shm_name;  ///< "" = "/mocap-posture-<uid>"
-};
-
-struct OutputsConfig {
-  JsonOutputConfig json;
-  VmcOutputConfig vmc;
-  VrchatOutputConfig vrchat;
-  PostureOutputConfig posture;
-};
-
-struct RecordingConfig {
-  std::string directory = ".";  ///< where relative file names of `record start` go
-  bool raw = true;              ///< store raw device bytes (bit-exact replay through drivers)
-  bool samples = true;          ///< store decoded samples
-  bool poses = true;            ///< store published pose frames
-  std::string auto_start;       ///< file to start recording into at startup ("" = none)
-  // Block compression on the recorder's writer thread (docs/session-format.md).
-  std::string compression = "none";  ///< "none" | "zstd"
-  int compression_level = 3;         ///< zstd level 1..19
-};
+// The [outputs.*] and [recording] sections: each output's options struct lives with the outputs.
+using outputs::JsonOutputConfig;
+using outputs::OutputsConfig;
+using outputs::PostureOutputConfig;
+using outputs::RecordingConfig;
+using outputs::VmcOutputConfig;
+using outputs::VrchatOutputConfig;
 
 struct DaemonSection {
   LogLevel log_level = LogLevel::info;

@@ -14,39 +14,12 @@
 #include "mocap/daemon/control.hpp"
 #include "mocap/daemon/pipeline.hpp"
 #include "mocap/drivers/device.hpp"
+#include "mocap/outputs/recorder.hpp"
 
 namespace mocap::daemon {
 
 /// Makes a live device for a spec (mocapd passes mocap::make_device).
 using DeviceFactory = std::function<std::unique_ptr<Device>(const DeviceSpec&, Logger)>;
-
-/// What a finished recording holds (the `record stop` reply).
-struct RecordingSummary {
-  std::string path;
-  double duration_s = 0;    ///< from start to stop (monotonic clock)
-  uint64_t frames = 0;      ///< pose frames accepted
-  uint64_t samples = 0;     ///< samples accepted
-  uint64_t raw_blocks = 0;  ///< raw byte blocks accepted
-  uint64_t drops = 0;       ///< blocks dropped (writer behind, or the recording had stopped)
-  uint64_t bytes = 0;       ///< file size on disk, header included
-  std::string error;        ///< why the recording stopped early ("" if it did not)
-};
-
-/// Starts and stops a recording (the session writer lives behind this).
-class Recorder {
- public:
-  virtual ~Recorder() = default;
-  /// Creates a new file for `name` (see recording_file.hpp: exclusive, inside
-  /// recording.directory; "" = a fresh take name; `unique`: a -N suffix instead of an error
-  /// when the name is taken) and returns the tap to install, or throws std::runtime_error.
-  virtual RecordTap* start(const std::string& name, bool unique) = 0;
-  /// The file being recorded ("" when not recording).
-  virtual std::string path() const = 0;
-  /// Flushes and closes the current recording (after the tap was removed).
-  virtual RecordingSummary stop() = 0;
-  /// Non-empty if the recording stopped by itself (e.g. disk full).
-  virtual std::string error() const { return {}; }
-};
 
 /// Something running beside the pipeline for the daemon's lifetime (e.g. the demo's simulated
 /// devices). Started before the devices are opened, stopped after they are closed.
@@ -71,11 +44,11 @@ class Daemon {
  public:
   struct Parts {
     std::unique_ptr<PoseEngine> engine;
-    DeviceFactory device_factory;                    ///< null: no devices are opened
-    std::unique_ptr<Recorder> recorder;              ///< null: recording unavailable
-    std::vector<std::unique_ptr<FrameSink>> sinks;   ///< extra outputs (streams, posture)
-    std::vector<std::unique_ptr<Service>> services;  ///< e.g. the demo's simulated devices
-    uint32_t frame_flags = 0;                        ///< e.g. kFrameDemo
+    DeviceFactory device_factory;                         ///< null: no devices are opened
+    std::unique_ptr<outputs::Recorder> recorder;          ///< null: recording unavailable
+    std::vector<std::unique_ptr<outputs::Output>> sinks;  ///< outputs (streams, posture)
+    std::vector<std::unique_ptr<Service>> services;       ///< e.g. the demo's simulated devices
+    uint32_t frame_flags = 0;                             ///< e.g. kFrameDemo
   };
   Daemon(Config cfg, Parts parts, Logger log);
   ~Daemon();

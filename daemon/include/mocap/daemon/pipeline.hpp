@@ -17,18 +17,9 @@
 #include "mocap/core/wakeup.hpp"
 #include "mocap/daemon/pipeline_core.hpp"
 #include "mocap/drivers/device.hpp"
+#include "mocap/outputs/recorder.hpp"
 
 namespace mocap::daemon {
-
-/// Receives what a recording needs from every thread (raw bytes from device threads, samples
-/// and frames from the pipeline thread). Implementations must not block.
-class RecordTap {
- public:
-  virtual ~RecordTap() = default;
-  virtual void on_raw(uint16_t device_index, int64_t t_host_ns, std::span<const uint8_t> bytes) = 0;
-  virtual void on_sample(const ImuSample& s) = 0;
-  virtual void on_frame(const PoseFrame& f) = 0;
-};
 
 /// A snapshot of the pipeline for status reports (copied under a mutex, at most per frame).
 struct PipelineStatus {
@@ -50,7 +41,7 @@ class Pipeline final : public SampleSink {
   ~Pipeline() override;
 
   /// Before start(): frame consumers.
-  void add_sink(FrameSink* sink) { core_.add_sink(sink); }
+  void add_sink(outputs::Output* sink) { core_.add_sink(sink); }
   /// Any time: which frame flags to set (e.g. kFrameDemo).
   void start();
   void stop();
@@ -75,7 +66,7 @@ class Pipeline final : public SampleSink {
   void set_frame_flag(uint32_t flag, bool on);
   /// Installs (or with nullptr removes) the recording tap. Returns once the old tap is no
   /// longer in use by any thread, so the caller may destroy it.
-  void set_record_tap(RecordTap* tap);
+  void set_record_tap(outputs::RecordTap* tap);
   /// External counters per sensor (device decoder drops and errors), any thread.
   void set_device_counters(int sensor, uint32_t drops, uint32_t errors);
 
@@ -117,14 +108,14 @@ class Pipeline final : public SampleSink {
   mutable std::mutex cmd_mu_;
   std::vector<Command> commands_, commands_work_;
 
-  std::atomic<RecordTap*> tap_{nullptr};
+  std::atomic<outputs::RecordTap*> tap_{nullptr};
   std::atomic<int> tap_users_{0};
   /// Calls f(tap) when a recording tap is installed, counted in tap_users_ so that
   /// set_record_tap() can wait until no caller still holds the tap it replaced.
   template <class F>
   void with_tap(F&& f) {
     tap_users_.fetch_add(1);
-    if (RecordTap* t = tap_.load()) f(*t);
+    if (outputs::RecordTap* t = tap_.load()) f(*t);
     tap_users_.fetch_sub(1);
   }
 
@@ -134,10 +125,10 @@ class Pipeline final : public SampleSink {
   std::array<SensorTelemetry, kMaxSensors> telemetry_{};  // by sensor index
   int64_t last_snapshot_ns_ = 0;
 
-  class TapSink final : public FrameSink {
+  class TapSink final : public outputs::Output {
    public:
     explicit TapSink(Pipeline& p) : p_(p) {}
-    void publish(const PoseFrame& f) override;
+    void on_frame(const PoseFrame& f) override;
 
    private:
     Pipeline& p_;

@@ -10,28 +10,10 @@
 
 #include "mocap/daemon/config.hpp"
 #include "mocap/daemon/pose_engine.hpp"
+#include "mocap/outputs/output.hpp"
 #include "mocap/skeleton/pose_frame.hpp"
 
 namespace mocap::daemon {
-
-/// Receives published pose frames (posture shm, stream servers, recorder). Called on the
-/// pipeline thread: must not block.
-class FrameSink {
- public:
-  virtual ~FrameSink() = default;
-  virtual void publish(const PoseFrame& frame) = 0;
-};
-
-/// A FrameSink over anything with `publish(const PoseFrame&)` (PostureWriter, JSON, VMC).
-template <typename T>
-class FrameSinkAdapter final : public FrameSink {
- public:
-  explicit FrameSinkAdapter(T& target) : target_(target) {}
-  void publish(const PoseFrame& frame) override { target_.publish(frame); }
-
- private:
-  T& target_;
-};
 
 /// Static description of one rig sensor.
 struct SensorInfo {
@@ -56,9 +38,10 @@ class PipelineCore {
   PipelineCore(const PipelineConfig& cfg, const CalibrationConfig& calib,
                std::vector<SensorInfo> sensors, PoseEngine& engine);
 
-  void add_sink(FrameSink* sink) { sinks_.push_back(sink); }
+  /// Frame consumers, called on the thread that drives this core (live: must not block).
+  void add_sink(outputs::Output* sink) { sinks_.push_back(sink); }
   PoseEngine& engine() { return engine_; }
-  void remove_sink(FrameSink* sink);
+  void remove_sink(outputs::Output* sink);
 
   /// One sample (sensor_id indexes the rig). Publishes a frame too in per-sample mode.
   void process(const ImuSample& s);
@@ -121,7 +104,7 @@ class PipelineCore {
   CalibrationConfig calib_;
   std::vector<SensorInfo> sensors_;
   PoseEngine& engine_;
-  std::vector<FrameSink*> sinks_;
+  std::vector<outputs::Output*> sinks_;
   std::vector<Health> health_;
   PoseFrame frame_;
   uint64_t frame_no_ = 0, samples_ = 0, rejected_ = 0;

@@ -4,7 +4,7 @@
 
 #include <memory>
 
-#include "mocap/skeleton/posture_shm.hpp"
+#include "mocap/outputs/posture_shm.hpp"
 #include "mocap/viewer/pose_source.hpp"
 
 namespace mocap::viewer {
@@ -18,7 +18,7 @@ class ShmSource final : public PoseSource {
 
  private:
   std::string name_;
-  std::unique_ptr<PostureReader> reader_;
+  std::unique_ptr<outputs::PostureReader> reader_;
   std::string error_;
   double next_try_s_ = 0, last_change_s_ = 0;
   uint64_t last_sequence_ = 0;
