@@ -2,8 +2,6 @@
 // orientation -> calibration and alignment -> skeleton, for one rig (see body_tracker.hpp).
 #include "mocap/rig/body_tracker.hpp"
 
-#include "mocap/skeleton/quat_math.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -13,6 +11,7 @@
 
 #include "mocap/core/segments.hpp"
 #include "mocap/core/units.hpp"
+#include "mocap/skeleton/quat_math.hpp"
 #include "mocap/skeleton/sensor_sites.hpp"
 
 namespace mocap::rig {
