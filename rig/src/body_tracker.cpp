@@ -102,7 +102,8 @@ SensorHealth BodyTracker::sensor_health(int i, const FilterOutput& o) const {
 
 void BodyTracker::on_sample(int i, const ImuSample& in) {
   if (i < 0 || i >= sensor_count()) return;
-  track_sample(i, in, filter_sample(i, in));
+  const ImuSample s = prepared(i, in);
+  track_prepared(i, in.has(kFieldMag), s, filter_prepared(i, s));
 }
 
 ImuSample BodyTracker::prepared(int i, const ImuSample& in) const {
@@ -114,19 +115,26 @@ ImuSample BodyTracker::prepared(int i, const ImuSample& in) const {
 }
 
 FilterOutput BodyTracker::filter_sample(int i, const ImuSample& in) {
-  AttitudeFilter& f = filters_[static_cast<size_t>(i)];
-  // 2. Filter; an orientation source (a tracker running its own filter, sending its
-  //    orientation without rates: kFieldQuat and no gyro) stands in for it (track_sample).
-  if (!(in.has(kFieldQuat) && !in.has(kFieldGyr))) f.update(prepared(i, in));
-  return f.output();
+  return filter_prepared(i, prepared(i, in));
 }
 
 void BodyTracker::track_sample(int i, const ImuSample& in, const FilterOutput& o) {
   if (i < 0 || i >= sensor_count()) return;
+  track_prepared(i, in.has(kFieldMag), prepared(i, in), o);
+}
+
+FilterOutput BodyTracker::filter_prepared(int i, const ImuSample& s) {
+  AttitudeFilter& f = filters_[static_cast<size_t>(i)];
+  // 2. Filter; an orientation source (a tracker running its own filter, sending its
+  //    orientation without rates: kFieldQuat and no gyro) stands in for it (track_prepared).
+  if (!(s.has(kFieldQuat) && !s.has(kFieldGyr))) f.update(s);
+  return f.output();
+}
+
+void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const FilterOutput& o) {
   const size_t k = static_cast<size_t>(i);
   const TrackerSensor& sensor = sensors_[k];
-  const ImuSample s = prepared(i, in);
-  if (in.has(kFieldMag)) has_mag_[k] = true;
+  if (sent_mag) has_mag_[k] = true;
   if (s.has(kFieldQuat) && !s.has(kFieldGyr)) {
     q_source_[k] = s.q_device_sensor;
     is_source_[k] = true;
@@ -532,6 +540,7 @@ void BodyTracker::start_calibration(CalibrationPose pose, int64_t t_start_ns,
 }
 
 std::optional<CalibrationResult> BodyTracker::take_calibration_result() {
+  if (!result_) return std::nullopt;  // (asked after every sample)
   std::optional<CalibrationResult> r;
   r.swap(result_);
   return r;

@@ -23,6 +23,7 @@
 
 #include "../common/blender_runner.hpp"
 #include "../common/e2e_process.hpp"
+#include "../common/temp_dir.hpp"
 #include "../common/free_port.hpp"
 #include "../common/raw_unix_call.hpp"
 #include "mocap/session/session_reader.hpp"
@@ -32,20 +33,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-
-/// A fresh directory under /tmp, removed on destruction.
-struct ScratchDir {
-  ScratchDir() {
-    char tmpl[] = "/tmp/mocap-blender-XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string file(const std::string& name) const { return path + "/" + name; }
-  std::string path;
-};
 
 /// Ours (x fwd, y left, z up) to Blender's axes (character facing -Y): A q A^-1 with A = -90
 /// deg about z, i.e. (w, x, y, z) -> (w, y, -x, z). Written out here as in the script.
@@ -67,7 +54,7 @@ TEST(BlenderLiveLink, FollowsTheStreamRecordsReconnectsAndImportsATake) {
   if (!test::have_blender()) GTEST_SKIP() << "blender not installed";
   const std::string zip = std::string(MOCAP_BINARY_DIR) + "/blender/mocap_live.zip";
   ASSERT_TRUE(fs::exists(zip)) << zip << " (the blender_addon target)";
-  ScratchDir dir;
+  test::TempDir dir("blender");
   const int port = test::free_loopback_port(SOCK_STREAM);
   const std::string control = dir.file("ctl.sock"), take = dir.file("take.mocapses");
   {
@@ -75,7 +62,7 @@ TEST(BlenderLiveLink, FollowsTheStreamRecordsReconnectsAndImportsATake) {
     cfg << "[daemon]\ncontrol_socket = \"" << control << "\"\n"
         << "[outputs.json]\nenabled = true\nport = " << port << "\n"
         << "[outputs.posture]\nenabled = false\n"
-        << "[recording]\ndirectory = \"" << dir.path << "\"\nauto_start = \"take.mocapses\"\n"
+        << "[recording]\ndirectory = \"" << dir.path() << "\"\nauto_start = \"take.mocapses\"\n"
         << "[demo]\npath = \"direct\"\n";  // the performer's samples straight in: a light demo
   }
   const std::vector<std::string> mocapd = {test::kBinDir + "mocapd", "--config",
@@ -203,7 +190,7 @@ TEST(BlenderLiveLink, FollowsTheStreamRecordsReconnectsAndImportsATake) {
 }
 
 TEST(BlenderLiveLink, TheStreamModuleKeepsFramesRefusesBadLinesAndKeepsTimesInOrder) {
-  ScratchDir dir;
+  test::TempDir dir("blender");
   const std::string out = dir.file("units.out");
   const int rc = test::run_program(
       {"/usr/bin/python3", std::string(MOCAP_SOURCE_DIR) + "/tests/blender/stream_units.py",
@@ -215,7 +202,7 @@ TEST(BlenderLiveLink, TheStreamModuleKeepsFramesRefusesBadLinesAndKeepsTimesInOr
 }
 
 TEST(BlenderLiveLink, TheStreamClientWaitsForMocapdThenReadsItsPrivateUnixSocket) {
-  ScratchDir dir;
+  test::TempDir dir("blender");
   const std::string sock = dir.file("pose.sock"), out = dir.file("client.out");
   const pid_t client = test::spawn(
       {"/usr/bin/python3", std::string(MOCAP_SOURCE_DIR) + "/tests/blender/stream_check.py",

@@ -5,15 +5,13 @@
 // (tests/skeleton) and the live-link add-on test (tests/blender).
 #pragma once
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
+#include <fstream>
 #include <string>
 #include <vector>
 
-extern char** environ;
+#include "run_program.hpp"
 
 namespace mocap::test {
 
@@ -33,26 +31,13 @@ inline std::vector<std::string> blender_argv(const std::string& script,
   return a;
 }
 
-/// Runs the script to completion (stdout and stderr into `log`); its exit status (128 + signal
-/// when killed, -1 when Blender could not be started).
+/// Runs the script to completion (its stdout, then its stderr, into `log`); its exit status
+/// (128 + signal when killed, -1 when Blender could not be started).
 inline int run_blender(const std::string& script, const std::vector<std::string>& args,
                        const std::string& log) {
-  std::vector<std::string> argv = blender_argv(script, args);
-  std::vector<char*> a;
-  for (auto& s : argv)
-    a.push_back(s.data());
-  a.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  const int spawned = posix_spawn(&pid, a[0], &fa, nullptr, a.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (spawned != 0) return -1;
-  int st = 0;
-  if (waitpid(pid, &st, 0) != pid) return -1;
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+  const Result r = run(blender_argv(script, args));
+  std::ofstream(log, std::ios::binary) << r.out << r.err;
+  return r.code;
 }
 
 }  // namespace mocap::test

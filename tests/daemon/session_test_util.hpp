@@ -18,6 +18,8 @@
 #include "mocap/session/session_reader.hpp"
 #include "mocap/session/session_writer.hpp"
 
+#include "../common/temp_dir.hpp"
+
 namespace mocap::test {
 
 inline session::SessionHeader make_header() {
@@ -105,23 +107,6 @@ inline bool same_pose(const PoseFrame& a, const PoseFrame& b) {
   return true;
 }
 
-/// A fresh directory under the build tree's temp area, removed with its content.
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "mocap-io-XXXXXX").string();
-    path_ = ::mkdtemp(tmpl.data());
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return path_ + "/" + name; }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
 
 inline std::vector<uint8_t> slurp(const std::string& path) {
   std::vector<uint8_t> b;

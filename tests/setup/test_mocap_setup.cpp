@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "../common/e2e_process.hpp"
+#include "../common/temp_dir.hpp"
 #include "../common/free_port.hpp"
 #include "../common/raw_unix_call.hpp"
 #include "live_performer.hpp"
@@ -35,19 +36,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-
-struct ScratchDir {
-  ScratchDir() {
-    char tmpl[] = "/tmp/mocap-setup-XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string file(const std::string& n) const { return path + "/" + n; }
-  std::string path;
-};
 
 /// A program with its stdin and stdout on pipes (stderr to a file).
 struct Piped {
@@ -137,7 +125,7 @@ bool below(int k, int s) {
 }  // namespace
 
 TEST(MocapSetup, AssignsEverySensorByMotionAndMocapdRunsTheRig) {
-  ScratchDir dir;
+  test::TempDir dir("setup");
   test::LivePerformer performer;
   std::vector<Strapped> truth;
   std::vector<std::unique_ptr<SimulatedDevice>> serial;
@@ -293,7 +281,7 @@ TEST(MocapSetup, AssignsEverySensorByMotionAndMocapdRunsTheRig) {
        "daemon.control_socket=\"" + control + "\"", "--set",
        "outputs.json.port=" + std::to_string(json_port), "--set", "outputs.posture.enabled=false",
        "--set", "calibration.file=\"" + dir.file("cal.toml") + "\"", "--set",
-       "recording.directory=\"" + dir.path + "\""},
+       "recording.directory=\"" + dir.path() + "\""},
       dir.file("mocapd.log"));
   ASSERT_GT(daemon, 0);
   int streaming = 0;

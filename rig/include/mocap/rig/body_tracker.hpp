@@ -215,6 +215,10 @@ class BodyTracker {
   std::vector<FilterOutput> last_output_;
   /// The sample as the filter takes it: gyro scale divided out, no field in a 6D rig.
   ImuSample prepared(int i, const ImuSample& in) const;
+  /// filter_sample and track_sample on the prepared sample (on_sample prepares it once);
+  /// sent_mag: the sensor's own sample carried a field (before a 6D rig dropped it).
+  FilterOutput filter_prepared(int i, const ImuSample& s);
+  void track_prepared(int i, bool sent_mag, const ImuSample& s, const FilterOutput& o);
 };
 
 /// The rig mapping (segment -> sensor index) of a sensor list.
