@@ -240,6 +240,14 @@ void AttitudeFilter::update_rest_acc(const Eigen::Vector3d& acc) {
     st_.rest.t_s = 0;
     st_.rest.at_rest = false;
   } else {
+    if (!st_.bias.rest_seen) {  // until the first rest: the gyro summed from its first sample
+      if (st_.rest.t_s == 0) {
+        st_.rest.gyr_sum_rad_s.setZero();
+        st_.rest.n = 0;
+      }
+      st_.rest.gyr_sum_rad_s += st_.strapdown.last_gyr_rad_s;
+      ++st_.rest.n;
+    }
     st_.rest.t_s += ts;
     if (st_.rest.t_s >= p_.rest.min_t_s) st_.rest.at_rest = true;
   }
@@ -307,9 +315,20 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   Eigen::Matrix3d cm;
   const Eigen::Vector3d& b = st_.bias.rad_s;
   if (st_.rest.at_rest && p_.bias.rest_est) {
-    e = st_.rest.last_gyr_lp - b;
     cm = Eigen::Matrix3d::Identity();
-    w.setConstant(c_.bias.rest_w);
+    if (st_.bias.rest_seen) {
+      e = st_.rest.last_gyr_lp - b;
+      w.setConstant(c_.bias.rest_w);
+    } else {
+      // The first rest (a still start): its whole mean so far, from the rest's first sample
+      // (not only from its detection, rest.min_t_s later), as one measurement weighing as
+      // many rest updates as it spans: the bias and its uncertainty the rest updates would
+      // reach only that much later.
+      st_.bias.rest_seen = true;
+      const double n = std::max(1, st_.rest.n);
+      e = st_.rest.gyr_sum_rad_s / n - b;
+      w.setConstant(c_.bias.rest_w * c_.bias.decim / n);
+    }
   } else if (p_.bias.motion_est) {
     e.x() = -acc_e.y() / ts + rb_lp.x() - r_lp.row(0).dot(b);
     e.y() = acc_e.x() / ts + rb_lp.y() - r_lp.row(1).dot(b);

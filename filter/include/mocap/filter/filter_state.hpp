@@ -49,7 +49,8 @@ struct BiasState {
   Eigen::Vector3d rad_s = Eigen::Vector3d::Zero();  ///< the estimate
   Eigen::Matrix3d p = Eigen::Matrix3d::Zero();      ///< its covariance, in (0.01 deg/s)^2
   bool p_init = false;
-  int n = 0;                                           ///< acc samples in this block
+  bool rest_seen = false;  ///< the first rest's mean was taken (start-up over)
+  int n = 0;               ///< acc samples in this block
   Eigen::Vector2d corr_sum = Eigen::Vector2d::Zero();  ///< horizontal corrections summed
   Lowpass<9> motion_r_lp;                              ///< low-passed rotation matrix
   Lowpass<2> motion_bias_lp;                           ///< low-passed applied bias
@@ -80,6 +81,9 @@ struct RestState {
   double dev_gyr2 = 0, dev_acc2 = 0;  ///< squared deviations from the low-passes
   Lowpass<3> gyr_lp, acc_lp;
   Eigen::Vector3d last_gyr_lp = Eigen::Vector3d::Zero();  ///< rad/s, low-passed gyro
+  /// Until the first rest: the gyro summed over the acc samples of the current rest candidate.
+  Eigen::Vector3d gyr_sum_rad_s = Eigen::Vector3d::Zero();
+  int n = 0;
 };
 
 /// Magnetic disturbance: reference field, candidate for a new one, rejection budget.
