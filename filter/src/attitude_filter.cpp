@@ -9,6 +9,7 @@
 
 #include "mocap/core/units.hpp"
 #include "mocap/filter/input_check.hpp"
+#include "mocap/filter/small_angle.hpp"
 
 namespace mocap {
 AttitudeFilter::AttitudeFilter(const FilterParams& p) : p_(p) {
@@ -187,13 +188,22 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
   if (p_.gyr_gain.sigma_init > 0) {
     w -= st_.gyr_gain.matrix() * w;
   }
-  const double n = w.norm();
-  const double angle = n * t;
-  if (angle > 1e-12) {
-    const double c = std::cos(angle / 2), sn = std::sin(angle / 2) / n;
+  // Half the angle turned, squared: (|w| t / 2)^2. Small angles (nearly every sample) take the
+  // series of cos and sin(x)/x, without square root, sincos or division.
+  const double half2 = w.squaredNorm() * (t * t) * 0.25;
+  if (half2 > 0.25e-24) {  // angle > 1e-12 rad
+    double c, sn;          // cos(angle / 2), sin(angle / 2) / |w|
+    if (half2 <= kSmallAngle2) {
+      c = cos_small(half2);
+      sn = 0.5 * t * sinc_small(half2);
+    } else {
+      const double n = w.norm(), angle = n * t;
+      c = std::cos(angle / 2);
+      sn = std::sin(angle / 2) / n;
+    }
     const Eigen::Quaterniond dq(c, sn * w.x(), sn * w.y(), sn * w.z());
     st_.strapdown.q_gyr = st_.strapdown.q_gyr * dq;
-    st_.strapdown.q_gyr.normalize();
+    renormalize(st_.strapdown.q_gyr);
   }
 }
 
@@ -257,17 +267,19 @@ bool AttitudeFilter::update_inclination(const Eigen::Vector3d& acc) {
   Eigen::Vector3d acc_e = st_.inclination.q_acc * acc_f;
   const double an = acc_e.norm();
   if (!(an > 1e-9)) return false;
-  acc_e /= an;
+  acc_e *= 1.0 / an;
   st_.inclination.last_acc_earth = acc_e;
-  // Shortest rotation taking acc_e onto +z, applied fully.
+  // Shortest rotation taking acc_e onto +z, applied fully (unit: qw^2 + (x^2 + y^2) / 4qw^2 = 1).
   const double qw = std::sqrt(std::max((acc_e.z() + 1.0) / 2.0, 0.0));
   Eigen::Quaterniond qc;
-  if (qw > 1e-6)
-    qc = Eigen::Quaterniond(qw, 0.5 * acc_e.y() / qw, -0.5 * acc_e.x() / qw, 0);
-  else
+  if (qw > 1e-6) {
+    const double h = 0.5 / qw;
+    qc = Eigen::Quaterniond(qw, h * acc_e.y(), -h * acc_e.x(), 0);
+  } else {
     qc = Eigen::Quaterniond(0, 1, 0, 0);
+  }
   st_.inclination.q_acc = qc * st_.inclination.q_acc;
-  st_.inclination.q_acc.normalize();
+  renormalize(st_.inclination.q_acc);
   return true;
 }
 

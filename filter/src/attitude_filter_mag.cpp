@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "mocap/core/units.hpp"
+#include "mocap/filter/small_angle.hpp"
 
 namespace mocap {
 namespace {
@@ -230,9 +231,22 @@ void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double err, doub
   h.delta_var_rad2 += (c_.heading.q_rad2_s + sb2) * (dt_s > 0 ? dt_s : c_.ts.mag_s);  // real gap
   const double r = heading_measurement_var();
   const double k = heading_gain(h.delta_var_rad2 / (h.delta_var_rad2 + r));
-  h.delta_rad = wrap_pi(h.delta_rad + k * err);
+  const double step_rad = k * err;
+  h.delta_rad = wrap_pi(h.delta_rad + step_rad);
   h.delta_var_rad2 = (1 - k) * (1 - k) * h.delta_var_rad2 + k * k * r;
-  h.q_delta = heading_quat(h.delta_rad);
+  // q_delta turned by the step: a small one (nearly every sample) by the series, without
+  // sincos; w >= 0 as for delta_rad in [-pi, pi].
+  const double half2 = 0.25 * step_rad * step_rad;
+  if (half2 == 0) return;
+  if (half2 <= kSmallAngle2) {
+    const double c = cos_small(half2), s = 0.5 * step_rad * sinc_small(half2);
+    Eigen::Quaterniond& q = h.q_delta;
+    q = Eigen::Quaterniond(q.w() * c - q.z() * s, 0, 0, q.w() * s + q.z() * c);
+    if (q.w() < 0) q.coeffs() = -q.coeffs();
+    renormalize(q);
+  } else {
+    h.q_delta = heading_quat(h.delta_rad);
+  }
 }
 
 // Nominal (steady state = tau_mag), inflated by the squared disturbance indicators, each
