@@ -62,9 +62,20 @@ double AttitudeFilter::mag_latency_s() const {
   if (st_.upset.checking) upset_mag(mag);  // nothing to do while nothing was clipped
   // The heading the field implies against the gyro-propagated one (the 6D frame turns with the
   // gyro, so in a homogeneous field this stays near 0).
-  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.heading.delta_rad);
+  const double err = heading_innovation(m_e);
   if (p_.mag_dist.rejection) update_mag_disturbance(m_e, err);
   update_heading(m_e, err, dt_s);
+}
+
+// The field's heading atan2(m_x, m_y) in the 6D frame minus the estimate delta_rad, wrapped. It is
+// the angle of the horizontal field turned back by the estimate (cos and sin of delta from
+// q_delta): small nearly always, then its arctangent's series, without atan2.
+double AttitudeFilter::heading_innovation(const Eigen::Vector3d& m_e) const {
+  const Eigen::Quaterniond& q = st_.heading.q_delta;
+  const double cd = q.w() * q.w() - q.z() * q.z(), sd = 2 * q.w() * q.z();
+  const double along = m_e.y() * cd + m_e.x() * sd, across = m_e.x() * cd - m_e.y() * sd;
+  if (along > 0 && std::abs(across) * 16 <= along) return atan_small(across / along);
+  return wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.heading.delta_rad);
 }
 
 // Hard-iron estimator (decimated to hard_iron.step_s), fed with the latency-compensated raw

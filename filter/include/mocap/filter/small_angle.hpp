@@ -1,6 +1,6 @@
-// Rotations by small angles without libm calls, for the attitude filter's per-sample path: cos x
-// and sin(x)/x from their Taylor series in x^2, and a renormalisation of a quaternion that is unit
-// up to rounding. Hand-written because sincos, the square root and the divisions they replace
+// Rotations by small angles without libm calls, for the attitude filter's per-sample path: cos x,
+// sin(x)/x and atan x from their Taylor series, and a renormalisation of a quaternion that is unit
+// up to rounding. Hand-written because the sincos, atan2, square roots and divisions they replace
 // were a fifth of the filter's time per update (docs/filter.md, "Cost").
 #pragma once
 
@@ -22,6 +22,16 @@ inline double cos_small(double x2) {
 /// sin(x) / x for x^2 = x2 <= kSmallAngle2.
 inline double sinc_small(double x2) {
   return 1 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 * (1.0 / 362880))));
+}
+
+/// atan r for r^2 <= kSmallAngle2 (|r| <= 1/16: the first omitted term, r^15 / 15, is below
+/// 1e-18 |r|).
+inline double atan_small(double r) {
+  const double r2 = r * r;
+  return r *
+         (1 + r2 * (-1.0 / 3 +
+                    r2 * (1.0 / 5 +
+                          r2 * (-1.0 / 7 + r2 * (1.0 / 9 + r2 * (-1.0 / 11 + r2 * (1.0 / 13)))))));
 }
 
 /// q / |q| for a quaternion whose norm is 1 up to rounding of a few operations (a product of unit
