@@ -50,6 +50,9 @@ void AttitudeFilter::refresh_coeffs() {
   c_.heading.r0_rad2 = sh2 * p_.heading.tau_mag_s / c_.ts.mag_s;
   c_.mag_dist.k_ref = gain_from_tau(p_.mag_dist.ref_tau_s, c_.ts.mag_s);
   c_.mag_dist.head_th2_rad2 = sq(p_.mag_dist.heading_th_deg * kRadPerDeg);
+  c_.mag_dist.inv_head_th2_rad2 = 1.0 / c_.mag_dist.head_th2_rad2;
+  c_.mag_dist.inv_dip_th_rad = 1.0 / (p_.mag_dist.dip_th_deg * kRadPerDeg);
+  c_.heading.inv_tau_mag_s = 1.0 / p_.heading.tau_mag_s;
   c_.mag_dist.k_head = gain_from_tau(kHeadingDevTau_s, c_.ts.mag_s);
   // Hard-iron estimator: fixed period in seconds; variances relative to the field norm.
   c_.hard_iron.decim =
@@ -267,14 +270,15 @@ bool AttitudeFilter::update_inclination(const Eigen::Vector3d& acc) {
   Eigen::Vector3d acc_e = st_.inclination.q_acc * acc_f;
   const double an = acc_e.norm();
   if (!(an > 1e-9)) return false;
-  acc_e *= 1.0 / an;
-  st_.inclination.last_acc_earth = acc_e;
-  // Shortest rotation taking acc_e onto +z, applied fully (unit: qw^2 + (x^2 + y^2) / 4qw^2 = 1).
-  const double qw = std::sqrt(std::max((acc_e.z() + 1.0) / 2.0, 0.0));
+  st_.inclination.last_acc_earth = acc_e * (1.0 / an);
+  // Shortest rotation taking acc_e onto +z, applied fully: (|a| + a_z, a_y, -a_x, 0) normalised
+  // (its squared norm is 2 |a| (|a| + a_z)); w = sqrt((1 + a_z / |a|) / 2) > 1e-6 unless upside
+  // down.
+  const double s = an + acc_e.z();
   Eigen::Quaterniond qc;
-  if (qw > 1e-6) {
-    const double h = 0.5 / qw;
-    qc = Eigen::Quaterniond(qw, h * acc_e.y(), -h * acc_e.x(), 0);
+  if (s > 2e-12 * an) {
+    const double inv = 1.0 / std::sqrt(2 * an * s);
+    qc = Eigen::Quaterniond(s * inv, acc_e.y() * inv, -acc_e.x() * inv, 0);
   } else {
     qc = Eigen::Quaterniond(0, 1, 0, 0);
   }

@@ -35,7 +35,7 @@ Eigen::Quaterniond heading_quat(double delta_rad) {
 double AttitudeFilter::field_deviation2(double norm, double dip, double ref_norm,
                                         double ref_dip) const {
   const double dn = (norm - ref_norm) / (p_.mag_dist.norm_th * ref_norm);
-  const double dd = (dip - ref_dip) / (p_.mag_dist.dip_th_deg * kRadPerDeg);
+  const double dd = (dip - ref_dip) * c_.mag_dist.inv_dip_th_rad;
   return dn * dn + dd * dd;
 }
 
@@ -274,9 +274,9 @@ double AttitudeFilter::heading_measurement_var() const {
         p_.mag_dist.trust_weight * field_deviation2(d.norm_dip[0], d.norm_dip[1], rn, rd);
     if (ref) {  // the heading's deviation, once a reference exists
       const double x = d.head_dev_rad - d.ref_head_rad;
-      score += p_.mag_dist.trust_weight * x * x / c_.mag_dist.head_th2_rad2;
+      score += p_.mag_dist.trust_weight * x * x * c_.mag_dist.inv_head_th2_rad2;
     }
-    score += d.reject_t_s / p_.heading.tau_mag_s;
+    score += d.reject_t_s * c_.heading.inv_tau_mag_s;
     r *= 1.0 + score;
   }
   return r;
