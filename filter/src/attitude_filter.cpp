@@ -349,10 +349,13 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   if (w.x() < 0) return;
   const double clip = p_.bias.clip_deg_s * kRadPerDeg;
   e = e.cwiseMax(-clip).cwiseMin(clip);
-  const Eigen::Matrix3d s = cm * st_.bias.p * cm.transpose() + Eigen::Matrix3d(w.asDiagonal());
-  const Eigen::Matrix3d k = st_.bias.p * cm.transpose() * s.inverse();
+  // P C^T once: S = C (P C^T) + W, K = (P C^T) S^-1, P -= K (P C^T)^T (= K C P, P symmetric).
+  const Eigen::Matrix3d pct = st_.bias.p * cm.transpose();
+  Eigen::Matrix3d s = cm * pct;
+  s.diagonal() += w;
+  const Eigen::Matrix3d k = pct * s.inverse();
   st_.bias.rad_s = (st_.bias.rad_s + k * e).cwiseMax(-clip).cwiseMin(clip);
-  st_.bias.p -= k * cm * st_.bias.p;
+  st_.bias.p.noalias() -= k * pct.transpose();
 }
 
 // Regressor of G (row-major entries ij) in the horizontal rows r: R_ri w_j (w: the block's mean
@@ -406,7 +409,15 @@ FilterOutput AttitudeFilter::output() const {
   const bool rejection = p_.mag_dist.rejection;
   FilterOutput o;
   o.q_earth_sensor_6d = st_.inclination.q_acc * st_.strapdown.q_gyr;
-  o.q_earth_sensor = have_mag ? st_.heading.q_delta * o.q_earth_sensor_6d : o.q_earth_sensor_6d;
+  if (have_mag) {  // q_delta turns about z only: its product without the zero terms
+    const Eigen::Quaterniond& d = st_.heading.q_delta;
+    const Eigen::Quaterniond& q = o.q_earth_sensor_6d;
+    o.q_earth_sensor =
+        Eigen::Quaterniond(d.w() * q.w() - d.z() * q.z(), d.w() * q.x() - d.z() * q.y(),
+                           d.w() * q.y() + d.z() * q.x(), d.w() * q.z() + d.z() * q.w());
+  } else {
+    o.q_earth_sensor = o.q_earth_sensor_6d;
+  }
   o.gyro_bias_rad_s = st_.bias.rad_s;
   o.heading_sigma_rad = heading_sigma_rad();
   o.mag_heading_rad =

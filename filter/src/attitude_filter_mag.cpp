@@ -202,7 +202,8 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double e
     // than the test, as the field's heading wanders more than its norm and dip in motion.)
     // A new field replacing a known one must be seen while rotating (a static local
     // disturbance stays self-consistent at rest); the very first field needs no rotation.
-    if (d.ref_norm == 0 || st_.rest.last_gyr_lp.norm() >= p.new_min_gyr_deg_s * kRadPerDeg)
+    const double min_gyr_rad_s = p.new_min_gyr_deg_s * kRadPerDeg;
+    if (d.ref_norm == 0 || st_.rest.last_gyr_lp.squaredNorm() >= min_gyr_rad_s * min_gyr_rad_s)
       d.cand_t_s += ts;
     d.cand_age_s += ts;
     d.cand_norm += c_.mag_dist.k_ref * (norm - d.cand_norm);
