@@ -9,6 +9,7 @@
 
 #include "mocap/core/units.hpp"
 #include "mocap/filter/input_check.hpp"
+#include "mocap/filter/small_angle.hpp"
 
 namespace mocap {
 AttitudeFilter::AttitudeFilter(const FilterParams& p) : p_(p) {
@@ -49,6 +50,9 @@ void AttitudeFilter::refresh_coeffs() {
   c_.heading.r0_rad2 = sh2 * p_.heading.tau_mag_s / c_.ts.mag_s;
   c_.mag_dist.k_ref = gain_from_tau(p_.mag_dist.ref_tau_s, c_.ts.mag_s);
   c_.mag_dist.head_th2_rad2 = sq(p_.mag_dist.heading_th_deg * kRadPerDeg);
+  c_.mag_dist.inv_head_th2_rad2 = 1.0 / c_.mag_dist.head_th2_rad2;
+  c_.mag_dist.inv_dip_th_rad = 1.0 / (p_.mag_dist.dip_th_deg * kRadPerDeg);
+  c_.heading.inv_tau_mag_s = 1.0 / p_.heading.tau_mag_s;
   c_.mag_dist.k_head = gain_from_tau(kHeadingDevTau_s, c_.ts.mag_s);
   // Hard-iron estimator: fixed period in seconds; variances relative to the field norm.
   c_.hard_iron.decim =
@@ -187,13 +191,22 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
   if (p_.gyr_gain.sigma_init > 0) {
     w -= st_.gyr_gain.matrix() * w;
   }
-  const double n = w.norm();
-  const double angle = n * t;
-  if (angle > 1e-12) {
-    const double c = std::cos(angle / 2), sn = std::sin(angle / 2) / n;
+  // Half the angle turned, squared: (|w| t / 2)^2. Small angles (nearly every sample) take the
+  // series of cos and sin(x)/x, without square root, sincos or division.
+  const double half2 = w.squaredNorm() * (t * t) * 0.25;
+  if (half2 > 0.25e-24) {  // angle > 1e-12 rad
+    double c, sn;          // cos(angle / 2), sin(angle / 2) / |w|
+    if (half2 <= kSmallAngle2) {
+      c = cos_small(half2);
+      sn = 0.5 * t * sinc_small(half2);
+    } else {
+      const double n = w.norm(), angle = n * t;
+      c = std::cos(angle / 2);
+      sn = std::sin(angle / 2) / n;
+    }
     const Eigen::Quaterniond dq(c, sn * w.x(), sn * w.y(), sn * w.z());
     st_.strapdown.q_gyr = st_.strapdown.q_gyr * dq;
-    st_.strapdown.q_gyr.normalize();
+    renormalize(st_.strapdown.q_gyr);
   }
 }
 
@@ -265,17 +278,20 @@ bool AttitudeFilter::update_inclination(const Eigen::Vector3d& acc) {
   Eigen::Vector3d acc_e = st_.inclination.q_acc * acc_f;
   const double an = acc_e.norm();
   if (!(an > 1e-9)) return false;
-  acc_e /= an;
-  st_.inclination.last_acc_earth = acc_e;
-  // Shortest rotation taking acc_e onto +z, applied fully.
-  const double qw = std::sqrt(std::max((acc_e.z() + 1.0) / 2.0, 0.0));
+  st_.inclination.last_acc_earth = acc_e * (1.0 / an);
+  // Shortest rotation taking acc_e onto +z, applied fully: (|a| + a_z, a_y, -a_x, 0) normalised
+  // (its squared norm is 2 |a| (|a| + a_z)); w = sqrt((1 + a_z / |a|) / 2) > 1e-6 unless upside
+  // down.
+  const double s = an + acc_e.z();
   Eigen::Quaterniond qc;
-  if (qw > 1e-6)
-    qc = Eigen::Quaterniond(qw, 0.5 * acc_e.y() / qw, -0.5 * acc_e.x() / qw, 0);
-  else
+  if (s > 2e-12 * an) {
+    const double inv = 1.0 / std::sqrt(2 * an * s);
+    qc = Eigen::Quaterniond(s * inv, acc_e.y() * inv, -acc_e.x() * inv, 0);
+  } else {
     qc = Eigen::Quaterniond(0, 1, 0, 0);
+  }
   st_.inclination.q_acc = qc * st_.inclination.q_acc;
-  st_.inclination.q_acc.normalize();
+  renormalize(st_.inclination.q_acc);
   return true;
 }
 
@@ -352,10 +368,13 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   if (w.x() < 0) return;
   const double clip = p_.bias.clip_deg_s * kRadPerDeg;
   e = e.cwiseMax(-clip).cwiseMin(clip);
-  const Eigen::Matrix3d s = cm * st_.bias.p * cm.transpose() + Eigen::Matrix3d(w.asDiagonal());
-  const Eigen::Matrix3d k = st_.bias.p * cm.transpose() * s.inverse();
+  // P C^T once: S = C (P C^T) + W, K = (P C^T) S^-1, P -= K (P C^T)^T (= K C P, P symmetric).
+  const Eigen::Matrix3d pct = st_.bias.p * cm.transpose();
+  Eigen::Matrix3d s = cm * pct;
+  s.diagonal() += w;
+  const Eigen::Matrix3d k = pct * s.inverse();
   st_.bias.rad_s = (st_.bias.rad_s + k * e).cwiseMax(-clip).cwiseMin(clip);
-  st_.bias.p -= k * cm * st_.bias.p;
+  st_.bias.p.noalias() -= k * pct.transpose();
 }
 
 // Regressor of G (row-major entries ij) in the horizontal rows r: R_ri w_j (w: the block's mean
@@ -409,7 +428,15 @@ FilterOutput AttitudeFilter::output() const {
   const bool rejection = p_.mag_dist.rejection;
   FilterOutput o;
   o.q_earth_sensor_6d = st_.inclination.q_acc * st_.strapdown.q_gyr;
-  o.q_earth_sensor = have_mag ? st_.heading.q_delta * o.q_earth_sensor_6d : o.q_earth_sensor_6d;
+  if (have_mag) {  // q_delta turns about z only: its product without the zero terms
+    const Eigen::Quaterniond& d = st_.heading.q_delta;
+    const Eigen::Quaterniond& q = o.q_earth_sensor_6d;
+    o.q_earth_sensor =
+        Eigen::Quaterniond(d.w() * q.w() - d.z() * q.z(), d.w() * q.x() - d.z() * q.y(),
+                           d.w() * q.y() + d.z() * q.x(), d.w() * q.z() + d.z() * q.w());
+  } else {
+    o.q_earth_sensor = o.q_earth_sensor_6d;
+  }
   o.gyro_bias_rad_s = st_.bias.rad_s;
   o.heading_sigma_rad = heading_sigma_rad();
   o.mag_heading_rad =

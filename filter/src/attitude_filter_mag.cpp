@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "mocap/core/units.hpp"
+#include "mocap/filter/small_angle.hpp"
 
 namespace mocap {
 namespace {
@@ -34,7 +35,7 @@ Eigen::Quaterniond heading_quat(double delta_rad) {
 double AttitudeFilter::field_deviation2(double norm, double dip, double ref_norm,
                                         double ref_dip) const {
   const double dn = (norm - ref_norm) / (p_.mag_dist.norm_th * ref_norm);
-  const double dd = (dip - ref_dip) / (p_.mag_dist.dip_th_deg * kRadPerDeg);
+  const double dd = (dip - ref_dip) * c_.mag_dist.inv_dip_th_rad;
   return dn * dn + dd * dd;
 }
 
@@ -61,9 +62,20 @@ double AttitudeFilter::mag_latency_s() const {
   if (st_.upset.checking) upset_mag(mag);  // nothing to do while nothing was clipped
   // The heading the field implies against the gyro-propagated one (the 6D frame turns with the
   // gyro, so in a homogeneous field this stays near 0).
-  const double err = wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.heading.delta_rad);
+  const double err = heading_innovation(m_e);
   if (p_.mag_dist.rejection) update_mag_disturbance(m_e, err);
   update_heading(m_e, err, dt_s);
+}
+
+// The field's heading atan2(m_x, m_y) in the 6D frame minus the estimate delta_rad, wrapped. It is
+// the angle of the horizontal field turned back by the estimate (cos and sin of delta from
+// q_delta): small nearly always, then its arctangent's series, without atan2.
+double AttitudeFilter::heading_innovation(const Eigen::Vector3d& m_e) const {
+  const Eigen::Quaterniond& q = st_.heading.q_delta;
+  const double cd = q.w() * q.w() - q.z() * q.z(), sd = 2 * q.w() * q.z();
+  const double along = m_e.y() * cd + m_e.x() * sd, across = m_e.x() * cd - m_e.y() * sd;
+  if (along > 0 && std::abs(across) * 16 <= along) return atan_small(across / along);
+  return wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.heading.delta_rad);
 }
 
 // Hard-iron estimator (decimated to hard_iron.step_s), fed with the latency-compensated raw
@@ -190,7 +202,8 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double e
     // than the test, as the field's heading wanders more than its norm and dip in motion.)
     // A new field replacing a known one must be seen while rotating (a static local
     // disturbance stays self-consistent at rest); the very first field needs no rotation.
-    if (d.ref_norm == 0 || st_.rest.last_gyr_lp.norm() >= p.new_min_gyr_deg_s * kRadPerDeg)
+    const double min_gyr_rad_s = p.new_min_gyr_deg_s * kRadPerDeg;
+    if (d.ref_norm == 0 || st_.rest.last_gyr_lp.squaredNorm() >= min_gyr_rad_s * min_gyr_rad_s)
       d.cand_t_s += ts;
     d.cand_age_s += ts;
     d.cand_norm += c_.mag_dist.k_ref * (norm - d.cand_norm);
@@ -230,9 +243,22 @@ void AttitudeFilter::update_heading(const Eigen::Vector3d& m_e, double err, doub
   h.delta_var_rad2 += (c_.heading.q_rad2_s + sb2) * (dt_s > 0 ? dt_s : c_.ts.mag_s);  // real gap
   const double r = heading_measurement_var();
   const double k = heading_gain(h.delta_var_rad2 / (h.delta_var_rad2 + r));
-  h.delta_rad = wrap_pi(h.delta_rad + k * err);
+  const double step_rad = k * err;
+  h.delta_rad = wrap_pi(h.delta_rad + step_rad);
   h.delta_var_rad2 = (1 - k) * (1 - k) * h.delta_var_rad2 + k * k * r;
-  h.q_delta = heading_quat(h.delta_rad);
+  // q_delta turned by the step: a small one (nearly every sample) by the series, without
+  // sincos; w >= 0 as for delta_rad in [-pi, pi].
+  const double half2 = 0.25 * step_rad * step_rad;
+  if (half2 == 0) return;
+  if (half2 <= kSmallAngle2) {
+    const double c = cos_small(half2), s = 0.5 * step_rad * sinc_small(half2);
+    Eigen::Quaterniond& q = h.q_delta;
+    q = Eigen::Quaterniond(q.w() * c - q.z() * s, 0, 0, q.w() * s + q.z() * c);
+    if (q.w() < 0) q.coeffs() = -q.coeffs();
+    renormalize(q);
+  } else {
+    h.q_delta = heading_quat(h.delta_rad);
+  }
 }
 
 // Nominal (steady state = tau_mag), inflated by the squared disturbance indicators, each
@@ -249,9 +275,9 @@ double AttitudeFilter::heading_measurement_var() const {
         p_.mag_dist.trust_weight * field_deviation2(d.norm_dip[0], d.norm_dip[1], rn, rd);
     if (ref) {  // the heading's deviation, once a reference exists
       const double x = d.head_dev_rad - d.ref_head_rad;
-      score += p_.mag_dist.trust_weight * x * x / c_.mag_dist.head_th2_rad2;
+      score += p_.mag_dist.trust_weight * x * x * c_.mag_dist.inv_head_th2_rad2;
     }
-    score += d.reject_t_s / p_.heading.tau_mag_s;
+    score += d.reject_t_s * c_.heading.inv_tau_mag_s;
     r *= 1.0 + score;
   }
   return r;

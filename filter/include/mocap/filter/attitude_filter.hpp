@@ -114,6 +114,8 @@ class AttitudeFilter {
   /// The (hard-iron corrected) field in the 6D earth frame, compensated for the magnetometer's
   /// latency behind the gyro (and the latency estimate updated).
   Eigen::Vector3d mag_to_earth(const Eigen::Vector3d& mag, const Eigen::Quaterniond& q6);
+  /// The field's heading in the 6D frame minus the heading estimate (wrapped to +-pi).
+  double heading_innovation(const Eigen::Vector3d& m_e) const;
   /// err_rad: the field's heading in the 6D frame minus the heading estimate.
   void update_mag_disturbance(const Eigen::Vector3d& m_e, double err_rad);
   void update_heading(const Eigen::Vector3d& m_e, double err_rad, double dt_s);

@@ -35,6 +35,7 @@ struct GyroGainCoeffs {
 struct HeadingCoeffs {
   double k_mag = 0;  ///< first-order gain for tau_mag_s (the rejection backstop's limit)
   double q_rad2_s = 0, r0_rad2 = 0;  ///< Kalman process (per s) and measurement variance
+  double inv_tau_mag_s = 0;          ///< 1 / tau_mag_s (multiplied: no division per sample)
 };
 
 /// s, smoothing of the heading innovation for the disturbance test (norm and dip: the
@@ -43,9 +44,10 @@ inline constexpr double kHeadingDevTau_s = 0.5;
 
 struct MagDisturbanceCoeffs {
   LowpassCoeffs norm_dip_lp;
-  double head_th2_rad2 = 0;  ///< heading_th_deg squared, rad^2
-  double k_head = 0;         ///< first-order gain of the heading innovation's smoothing
-  double k_ref = 0;          ///< first-order gain of the reference (and candidate) tracking
+  double head_th2_rad2 = 0;                          ///< heading_th_deg squared, rad^2
+  double inv_head_th2_rad2 = 0, inv_dip_th_rad = 0;  ///< 1 / that, 1 / dip_th_deg in rad
+  double k_head = 0;  ///< first-order gain of the heading innovation's smoothing
+  double k_ref = 0;   ///< first-order gain of the reference (and candidate) tracking
 };
 
 struct HardIronStageCoeffs {
