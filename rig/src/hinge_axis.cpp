@@ -142,7 +142,12 @@ void HingeAxisEstimator::choose_signs(bool relative_sign_known) {
       static_cast<size_t>(std::max_element(on_side.begin(), on_side.end()) - on_side.begin());
   j1_ *= signs[best][0];
   j2_ *= signs[best][1];
+  int second = 0;  // the runner-up among the pairs considered
+  for (size_t c = 0; c < 4; ++c)
+    if (c != best && !(relative_sign_known && signs[c][0] != signs[c][1]))
+      second = std::max(second, on_side[c]);
   sign_agreement_ = static_cast<double>(on_side[best]) / std::max(count_, 1);
+  sign_margin_ = static_cast<double>(on_side[best] - second) / std::max(count_, 1);
 }
 
 }  // namespace mocap::rig

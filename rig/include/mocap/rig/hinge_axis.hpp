@@ -61,6 +61,9 @@ class HingeAxisEstimator {
   double sigma_deg() const { return sigma_deg_; }
   /// Share of recent samples whose angle was on the flexing side (how sure the signs are).
   double sign_agreement() const { return sign_agreement_; }
+  /// That share less the next best pair of signs' (how clearly the signs were chosen: early,
+  /// with little flexion, several pairs stay on the flexing side).
+  double sign_margin() const { return sign_margin_; }
 
  private:
   struct Entry {
@@ -79,7 +82,7 @@ class HingeAxisEstimator {
   double weight_ = 0;
   bool known_ = false, updated_ = false;
   Eigen::Vector3d j1_ = Eigen::Vector3d::UnitY(), j2_ = Eigen::Vector3d::UnitY();
-  double sigma_deg_ = 180, sign_agreement_ = 0;
+  double sigma_deg_ = 180, sign_agreement_ = 0, sign_margin_ = 0;
 };
 
 }  // namespace mocap::rig
