@@ -29,18 +29,20 @@ void HardIronEstimator::restart(const Eigen::Vector3d& m_uT, const Eigen::Matrix
 void HardIronEstimator::step(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es, double dt_s,
                              double f_ref_uT, const HardIronCoeffs& k) {
   if (f_ref_uT > 0) f_uT = f_ref_uT;
-  update(m_uT, r_es, dt_s, k);
+  // gate() has solved the offset block's eigenproblem for this P when it ran (the eigenvalues
+  // are the same with or without eigenvectors): only the other paths solve it here.
+  if (update(m_uT, r_es, dt_s, k)) return;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
   es.computeDirect(p.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
   offset_sigma_uT = std::sqrt(std::max(es.eigenvalues()(2), 0.0));
 }
 
-void HardIronEstimator::update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es,
+bool HardIronEstimator::update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es,
                                double dt_s, const HardIronCoeffs& k) {
   if (!init) {
     init = true;
     restart(m_uT, r_es, k);
-    return;
+    return false;
   }
   const double f2 = f_uT * f_uT;
   // Predict: the field in the 6D frame wanders with its heading drift; b may change slowly.
@@ -56,7 +58,7 @@ void HardIronEstimator::update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3
   const double nis_now = y.dot(s_inv * y) / 3.0;
   if (!std::isfinite(nis_now)) {
     restart(m_uT, r_es, k);
-    return;
+    return false;
   }
   nis += k.k_nis * (std::min(nis_now, 100.0) - nis);
   if (nis > k.nis_max) {
@@ -65,7 +67,7 @@ void HardIronEstimator::update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3
     ++restarts;
     restart(m_uT, r_es, k);
     gate(k);
-    return;
+    return true;
   }
   const Eigen::Matrix<double, 6, 3> gain = pht * s_inv;
   c_uT += gain.topRows<3>() * y;
@@ -73,6 +75,7 @@ void HardIronEstimator::update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3
   p -= gain * pht.transpose();
   p = 0.5 * (p + p.transpose()).eval();
   gate(k);
+  return true;
 }
 
 // Use b only along directions whose variance is below the gate, and only when it is larger
@@ -81,6 +84,7 @@ void HardIronEstimator::gate(const HardIronCoeffs& k) {
   const double g2 = k.gate_rel2 * f_uT * f_uT;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
   es.computeDirect(p.bottomRightCorner<3, 3>());
+  offset_sigma_uT = std::sqrt(std::max(es.eigenvalues()(2), 0.0));
   Eigen::Vector3d u = Eigen::Vector3d::Zero();
   double z2 = 0;  // squared significance of the used part (offset / its sigma)
   double lam_used = 0;

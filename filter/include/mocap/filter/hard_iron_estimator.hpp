@@ -47,10 +47,11 @@ struct HardIronEstimator {
             const HardIronCoeffs& k);
 
  private:
-  void update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es, double dt_s,
+  /// True when it ended with gate() (which then set offset_sigma_uT).
+  bool update(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es, double dt_s,
               const HardIronCoeffs& k);
   void restart(const Eigen::Vector3d& m_uT, const Eigen::Matrix3d& r_es, const HardIronCoeffs& k);
-  void gate(const HardIronCoeffs& k);
+  void gate(const HardIronCoeffs& k);  ///< also sets offset_sigma_uT
 };
 
 }  // namespace mocap
