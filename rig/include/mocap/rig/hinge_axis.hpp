@@ -1,4 +1,5 @@
-// A hinge joint's axis (knee, elbow) in each of its two sensors' frames, from their
+// A hinge joint's axis (a knee; an elbow where its lower sensor does not turn with pronation:
+// the body tracker fits knees only) in each of its two sensors' frames, from their
 // inclinations alone. Turning about the hinge does not tilt the hinge's axis, so the axis has the
 // same elevation seen from either segment: (q1 j1).z = (q2 j2).z, i.e. u1.j1 = u2.j2 with u the
 // earth's up axis in each sensor's frame. No heading, magnetometer or mounting enters (a 6D
