@@ -23,9 +23,9 @@
 
 #include "../common/blender_runner.hpp"
 #include "../common/e2e_process.hpp"
-#include "../common/temp_dir.hpp"
 #include "../common/free_port.hpp"
 #include "../common/raw_unix_call.hpp"
+#include "../common/temp_dir.hpp"
 #include "mocap/session/session_reader.hpp"
 
 namespace mocap {

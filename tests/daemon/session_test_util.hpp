@@ -107,7 +107,6 @@ inline bool same_pose(const PoseFrame& a, const PoseFrame& b) {
   return true;
 }
 
-
 inline std::vector<uint8_t> slurp(const std::string& path) {
   std::vector<uint8_t> b;
   if (std::FILE* f = std::fopen(path.c_str(), "rb")) {

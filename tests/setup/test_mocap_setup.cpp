@@ -23,9 +23,9 @@
 #include <vector>
 
 #include "../common/e2e_process.hpp"
-#include "../common/temp_dir.hpp"
 #include "../common/free_port.hpp"
 #include "../common/raw_unix_call.hpp"
+#include "../common/temp_dir.hpp"
 #include "live_performer.hpp"
 #include "mocap/daemon/config.hpp"
 #include "mocap/devsim/sim_device.hpp"
