@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "mocap/core/units.hpp"
+#include "mocap/filter/filter_constants.hpp"
 #include "mocap/filter/input_check.hpp"
 #include "mocap/filter/small_angle.hpp"
 
@@ -39,9 +40,9 @@ void AttitudeFilter::refresh_coeffs() {
   c_.ts.mag_s = st_.mag_timing.ts_nom_s > 0 ? st_.mag_timing.ts_nom_s : c_.ts.acc_s;
 
   c_.acc_lp = butterworth(p_.inclination.tau_acc_s, c_.ts.acc_s);
-  c_.rest.gyr_lp = butterworth(p_.rest.filter_tau_s, c_.ts.gyr_s);
-  c_.rest.acc_lp = butterworth(p_.rest.filter_tau_s, c_.ts.acc_s);
-  c_.mag_dist.norm_dip_lp = butterworth(p_.mag_dist.current_tau_s, c_.ts.mag_s);
+  c_.rest.gyr_lp = butterworth(kRestFilterTau_s, c_.ts.gyr_s);
+  c_.rest.acc_lp = butterworth(kRestFilterTau_s, c_.ts.acc_s);
+  c_.mag_dist.norm_dip_lp = butterworth(kMagCurrentTau_s, c_.ts.mag_s);
   c_.heading.k_mag = gain_from_tau(p_.heading.tau_mag_s, c_.ts.mag_s);
   // Kalman heading: q = sigma^2 / tau, r = sigma^2 tau / T gives the time constant tau_mag
   // and the steady-state one-sigma heading_sigma_deg in an undisturbed field, at any rate.
@@ -55,37 +56,34 @@ void AttitudeFilter::refresh_coeffs() {
   c_.heading.inv_tau_mag_s = 1.0 / p_.heading.tau_mag_s;
   c_.mag_dist.k_head = gain_from_tau(kHeadingDevTau_s, c_.ts.mag_s);
   // Hard-iron estimator: fixed period in seconds; variances relative to the field norm.
-  c_.hard_iron.decim =
-      std::max(1, static_cast<int>(std::lround(p_.hard_iron.step_s / c_.ts.mag_s)));
-  c_.hard_iron.est.p0_offset_rel2 = sq(p_.hard_iron.sigma0);
+  c_.hard_iron.decim = std::max(1, static_cast<int>(std::lround(kHardIronStep_s / c_.ts.mag_s)));
+  c_.hard_iron.est.p0_offset_rel2 = sq(kHardIronSigma0);
   c_.hard_iron.est.q_offset_rel2_s =
       c_.hard_iron.est.p0_offset_rel2 / std::max(p_.hard_iron.tau_s, 1e-9);
-  c_.hard_iron.est.q_field_rel2_s = sq(p_.hard_iron.field_rw_deg * kRadPerDeg);
-  c_.hard_iron.est.r_rel2 = sq(p_.hard_iron.noise);
+  c_.hard_iron.est.q_field_rel2_s = sq(kHardIronFieldRw_deg * kRadPerDeg);
+  c_.hard_iron.est.r_rel2 = sq(kHardIronNoise);
   c_.hard_iron.est.gate_rel2 = sq(p_.hard_iron.gate);
-  c_.hard_iron.est.min_offset_rel = p_.hard_iron.min_offset;
-  c_.hard_iron.est.min_sigmas = p_.hard_iron.min_sigmas;
-  c_.hard_iron.est.min_sigmas_consistent = p_.hard_iron.consistent_min_sigmas;
-  c_.hard_iron.est.k_nis = gain_from_tau(p_.hard_iron.nis_tau_s, c_.hard_iron.decim * c_.ts.mag_s);
-  c_.hard_iron.est.nis_max = p_.hard_iron.nis_max;
-  c_.hard_iron.k_select =
-      gain_from_tau(p_.hard_iron.select_tau_s, c_.hard_iron.decim * c_.ts.mag_s);
+  c_.hard_iron.est.min_offset_rel = kHardIronMinOffset;
+  c_.hard_iron.est.min_sigmas = kHardIronMinSigmas;
+  c_.hard_iron.est.k_nis = gain_from_tau(kHardIronNisTau_s, c_.hard_iron.decim * c_.ts.mag_s);
+  c_.hard_iron.est.nis_max = kHardIronNisMax;
+  c_.hard_iron.k_select = gain_from_tau(kHardIronSelectTau_s, c_.hard_iron.decim * c_.ts.mag_s);
   c_.mag_latency.k = gain_from_tau(p_.mag_latency.tau_s, c_.ts.mag_s);
-  c_.upset_acc_lp = butterworth(p_.upset.tau_s, c_.ts.acc_s);
-  c_.upset_mag_lp = butterworth(p_.upset.tau_s, c_.ts.mag_s);
+  c_.upset_acc_lp = butterworth(kUpsetTau_s, c_.ts.acc_s);
+  c_.upset_mag_lp = butterworth(kUpsetTau_s, c_.ts.mag_s);
   c_.upset_gyr_rad_s = p_.upset.gyr_deg_s * kRadPerDeg;
-  c_.mag_latency.k_hp = gain_from_tau(p_.mag_latency.hp_tau_s, c_.ts.mag_s);
+  c_.mag_latency.k_hp = gain_from_tau(kMagLatencyHpTau_s, c_.ts.mag_s);
 
   // The bias KF runs decimated to about 100 Hz: bias changes over minutes.
   c_.bias.decim = std::max(1, static_cast<int>(std::lround(0.01 / c_.ts.acc_s)));
   c_.bias.ts_s = c_.bias.decim * c_.ts.acc_s;
   c_.bias.lp = butterworth(p_.inclination.tau_acc_s, c_.bias.ts_s);
   // Bias KF in units of (0.01 deg/s)^2: uncertainty grows by 0.1 deg/s per forgetting time.
-  c_.bias.p0 = sq(p_.bias.sigma_init_deg_s * 100.0);
+  c_.bias.p0 = sq(kBiasSigmaInit_deg_s * 100.0);
   c_.bias.v = sq(0.1 * 100.0) * c_.bias.ts_s / p_.bias.forgetting_time_s;
   const double p_motion = sq(p_.bias.sigma_motion_deg_s * 100.0);
   c_.bias.motion_w = sq(p_motion) / c_.bias.v + p_motion;
-  c_.bias.vertical_w = c_.bias.motion_w / std::max(p_.bias.vertical_forgetting, 1e-10);
+  c_.bias.vertical_w = c_.bias.motion_w / kBiasVerticalForgetting;
   const double p_rest = sq(p_.bias.sigma_rest_deg_s * 100.0);
   c_.bias.rest_w = sq(p_rest) / c_.bias.v + p_rest;
   // Gyro-gain KF: every gain_decim bias steps (about 10 Hz; the residual is low-passed with
@@ -96,7 +94,7 @@ void AttitudeFilter::refresh_coeffs() {
   c_.gyr_gain.reg_lp = butterworth(p_.inclination.tau_acc_s, c_.gyr_gain.reg_decim * c_.bias.ts_s);
   const double gain_ts = c_.gyr_gain.decim * c_.bias.ts_s;
   c_.gyr_gain.p0 = sq(p_.gyr_gain.sigma_init);
-  c_.gyr_gain.v = sq(1e-3) * gain_ts / std::max(p_.gyr_gain.forgetting_time_s, 1e-9);
+  c_.gyr_gain.v = sq(1e-3) * gain_ts / kGyrGainForgettingTime_s;
   c_.gyr_gain.w = c_.bias.motion_w * sq(0.01 * kRadPerDeg);
 }
 
@@ -155,7 +153,7 @@ bool AttitudeFilter::stream_dt(int64_t t_ns, StreamTiming& timing, double& dt_s)
 [[gnu::flatten]] void AttitudeFilter::update(const ImuSample& s) {
   double dt_s = 0;
   if (s.has(kFieldGyr)) {
-    if (check_vector(s.gyr_rad_s, 0.0, p_.input.max_gyr_rad_s, cnt_) &&
+    if (check_vector(s.gyr_rad_s, 0.0, kMaxGyr_rad_s, cnt_) &&
         stream_dt(s.t_host_ns, st_.gyr_timing, dt_s)) {
       ++cnt_.gyr_ok;
       if (p_.upset.enabled &&
@@ -165,14 +163,14 @@ bool AttitudeFilter::stream_dt(int64_t t_ns, StreamTiming& timing, double& dt_s)
     }
   }
   if (s.has(kFieldAcc)) {
-    if (check_vector(s.acc_m_s2, 1e-3, p_.input.max_acc_m_s2, cnt_) &&
+    if (check_vector(s.acc_m_s2, 1e-3, kMaxAcc_m_s2, cnt_) &&
         stream_dt(s.t_host_ns, st_.acc_timing, dt_s)) {
       ++cnt_.acc_ok;
       update_acc(s.acc_m_s2, dt_s);
     }
   }
   if (s.has(kFieldMag)) {
-    if (check_vector(s.mag_uT, 1e-6, p_.input.max_mag_uT, cnt_) &&
+    if (check_vector(s.mag_uT, 1e-6, kMaxMag_uT, cnt_) &&
         stream_dt(s.t_host_ns, st_.mag_timing, dt_s)) {
       ++cnt_.mag_ok;
       update_mag(s.mag_uT, dt_s);
@@ -185,7 +183,7 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
   update_rest_gyr(gyr);
   st_.strapdown.last_gyr_rad_s = gyr;
   if (dt_s <= 0) return;  // first sample: nothing to integrate yet
-  const double t = std::min(dt_s, p_.input.max_gap_s);
+  const double t = std::min(dt_s, kMaxGap_s);
   // Exact quaternion exponential of the bias- and gain-corrected rate held over the period.
   Eigen::Vector3d w = gyr - st_.bias.rad_s;
   if (p_.gyr_gain.sigma_init > 0) {
@@ -213,7 +211,7 @@ void AttitudeFilter::update_gyr(const Eigen::Vector3d& gyr, double dt_s) {
 // Rest detection, gyro part: deviation from the low-passed rate.
 void AttitudeFilter::update_rest_gyr(const Eigen::Vector3d& gyr) {
   const double ts = c_.ts.gyr_s;
-  const auto& lp = st_.rest.gyr_lp.step(gyr.data(), c_.rest.gyr_lp, p_.rest.filter_tau_s, ts);
+  const auto& lp = st_.rest.gyr_lp.step(gyr.data(), c_.rest.gyr_lp, kRestFilterTau_s, ts);
   st_.rest.last_gyr_lp = Eigen::Vector3d(lp[0], lp[1], lp[2]);
   st_.rest.dev_gyr2 = (gyr - st_.rest.last_gyr_lp).squaredNorm();
   const double clip = p_.bias.clip_deg_s * kRadPerDeg;
@@ -245,7 +243,7 @@ void AttitudeFilter::update_acc(const Eigen::Vector3d& acc, double dt_s) {
 // Rest detection, acc part: rest once both deviations stayed small for rest.min_t_s.
 void AttitudeFilter::update_rest_acc(const Eigen::Vector3d& acc) {
   const double ts = c_.ts.acc_s;
-  const auto& alp = st_.rest.acc_lp.step(acc.data(), c_.rest.acc_lp, p_.rest.filter_tau_s, ts);
+  const auto& alp = st_.rest.acc_lp.step(acc.data(), c_.rest.acc_lp, kRestFilterTau_s, ts);
   st_.rest.dev_acc2 = (acc - Eigen::Vector3d(alp[0], alp[1], alp[2])).squaredNorm();
   const double thg = p_.rest.th_gyr_deg_s * kRadPerDeg, tha = p_.rest.th_acc_m_s2;
   if (st_.rest.dev_gyr2 >= thg * thg || st_.rest.dev_acc2 >= tha * tha ||
@@ -418,7 +416,7 @@ void AttitudeFilter::update_gain(const Eigen::Vector2d& residual,
   const Eigen::Matrix<double, 9, 2> ph = st_.gyr_gain.p * reg.transpose();
   s += reg * ph;
   const Eigen::Matrix<double, 9, 2> k = ph * s.inverse();
-  const double clip = p_.gyr_gain.clip;
+  const double clip = kGyrGainClip;
   st_.gyr_gain.g = (st_.gyr_gain.g + k * residual).cwiseMax(-clip).cwiseMin(clip);
   st_.gyr_gain.p -= k * ph.transpose();
 }

@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "mocap/core/units.hpp"
+#include "mocap/filter/filter_constants.hpp"
 #include "mocap/filter/small_angle.hpp"
 
 namespace mocap {
@@ -41,8 +42,7 @@ double AttitudeFilter::field_deviation2(double norm, double dip, double ref_norm
 
 double AttitudeFilter::mag_latency_s() const {
   return p_.mag_latency.tau_s > 0
-             ? st_.mag_latency.latency_s(p_.mag_latency.min_rate_deg_s * kRadPerDeg,
-                                         p_.mag_latency.max_s)
+             ? st_.mag_latency.latency_s(kMagLatencyMinRate_deg_s * kRadPerDeg, kMagLatencyMax_s)
              : 0.0;
 }
 
@@ -94,25 +94,13 @@ void AttitudeFilter::update_hard_iron(const Eigen::Vector3d& mag_raw,
 }
 
 // Applies the gated offset only while it explains a disturbance: the squared norm/dip
-// deviations from the reference (relative to the thresholds) without and with it; or, with a
-// lower significance, while the estimator's innovations have stayed consistent.
+// deviations from the reference (relative to the thresholds) without and with it.
 void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
                                       const Eigen::Vector3d& m_corr_e) {
   HardIronState& hs = st_.hard_iron;
   const HardIronEstimator& h = hs.est;
   const double ref_norm = st_.mag_dist.ref_norm;
-  bool consistent = false;
-  if (p_.hard_iron.consistent_nis > 0) {
-    if (h.restarts != hs.restarts_seen || !(h.nis < p_.hard_iron.consistent_nis))
-      hs.consistent_s = 0;
-    else
-      hs.consistent_s += c_.hard_iron.decim * c_.ts.mag_s;
-    hs.restarts_seen = h.restarts;
-    consistent = ref_norm > 0 && hs.consistent_s >= p_.hard_iron.consistent_s;
-  }
-  if (p_.hard_iron.select_margin <= 0) {
-    hs.weight = 1;
-  } else if (ref_norm <= 0 || h.used_uT.isZero()) {
+  if (ref_norm <= 0 || h.used_uT.isZero()) {
     // Nothing to compare with before a reference field exists (a field that varies around
     // a magnet at start-up must not be "explained" by an offset), or nothing to apply.
     hs.select = 0;
@@ -124,14 +112,9 @@ void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
       return std::min(field_deviation2(n, dip_rad(m, n), ref_norm, st_.mag_dist.ref_dip), 25.0);
     };
     hs.select += c_.hard_iron.k_select * (score(m_raw_e) - score(m_corr_e) - hs.select);
-    hs.weight = std::clamp(hs.select / p_.hard_iron.select_margin, 0.0, 1.0);
+    hs.weight = std::clamp(hs.select / kHardIronSelectMargin, 0.0, 1.0);
   }
   hs.applied_uT = hs.weight * h.used_uT;
-  hs.applied_consistent = false;
-  if (consistent && h.used_consistent_uT.norm() > hs.applied_uT.norm()) {
-    hs.applied_uT = h.used_consistent_uT;
-    hs.applied_consistent = true;
-  }
 }
 
 // Into the 6D earth frame, compensated for the latency behind the gyro: a field read L late
@@ -156,7 +139,7 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double e
   const double ts = c_.ts.mag_s;
   const double n = m_e.norm();
   const double nd[2] = {n, dip_rad(m_e, n)};
-  const auto& f = d.norm_dip_lp.step(nd, c_.mag_dist.norm_dip_lp, p.current_tau_s, ts);
+  const auto& f = d.norm_dip_lp.step(nd, c_.mag_dist.norm_dip_lp, kMagCurrentTau_s, ts);
   d.norm_dip[0] = f[0];
   d.norm_dip[1] = f[1];
   const double norm = f[0], dip = f[1];
@@ -185,7 +168,7 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double e
   if (std::abs(norm - d.ref_norm) < p.norm_th * d.ref_norm && std::abs(dip - d.ref_dip) < dip_th &&
       head_ok) {
     d.undisturbed_t_s += ts;
-    if (d.undisturbed_t_s >= p.min_undisturbed_time_s) {
+    if (d.undisturbed_t_s >= kMagMinUndisturbedTime_s) {
       d.disturbed = false;
       d.ref_norm += c_.mag_dist.k_ref * (norm - d.ref_norm);
       d.ref_dip += c_.mag_dist.k_ref * (dip - d.ref_dip);
@@ -202,7 +185,7 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double e
     // than the test, as the field's heading wanders more than its norm and dip in motion.)
     // A new field replacing a known one must be seen while rotating (a static local
     // disturbance stays self-consistent at rest); the very first field needs no rotation.
-    const double min_gyr_rad_s = p.new_min_gyr_deg_s * kRadPerDeg;
+    const double min_gyr_rad_s = kMagNewMinGyr_deg_s * kRadPerDeg;
     if (d.ref_norm == 0 || st_.rest.last_gyr_lp.squaredNorm() >= min_gyr_rad_s * min_gyr_rad_s)
       d.cand_t_s += ts;
     d.cand_age_s += ts;
@@ -210,12 +193,12 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double e
     d.cand_dip += c_.mag_dist.k_ref * (dip - d.cand_dip);
     d.cand_head_rad += c_.mag_dist.k_ref * dh;
     if (d.disturbed &&
-        (d.cand_t_s >= p.new_time_s || (d.ref_norm == 0 && d.cand_t_s >= p.new_first_time_s))) {
+        (d.cand_t_s >= p.new_time_s || (d.ref_norm == 0 && d.cand_t_s >= kMagNewFirstTime_s))) {
       if (!d.have_ref) end_mag_startup();
       d.ref_norm = d.cand_norm;
       d.ref_dip = d.cand_dip;
       d.disturbed = false;
-      d.undisturbed_t_s = p.min_undisturbed_time_s;
+      d.undisturbed_t_s = kMagMinUndisturbedTime_s;
       if (settled) {
         // The new field's heading disagrees with the gyro-propagated one by the candidate's
         // innovation: the heading is that uncertain, and converges on the new field.
@@ -298,20 +281,19 @@ double AttitudeFilter::heading_gain(double k) {
       use_init = false;
       if (!h.set)
         k = 1;
-      else if (d.cand_age_s < p_.mag_dist.min_undisturbed_time_s)
+      else if (d.cand_age_s < kMagMinUndisturbedTime_s)
         k = 0;
       h.set = true;
     } else if (d.disturbed) {
       use_init = false;
-      if (d.reject_t_s <= p_.mag_dist.max_rejection_time_s) {
+      if (d.reject_t_s <= kMagMaxRejectionTime_s) {
         d.reject_t_s += ts;
         k = 0;
       } else {
-        k = std::min(k, c_.heading.k_mag) /
-            p_.mag_dist.rejection_factor;  // backstop: nominal gain at most
+        k = std::min(k, c_.heading.k_mag) / kMagRejectionFactor;  // backstop: nominal gain at most
       }
     } else {
-      d.reject_t_s = std::max(d.reject_t_s - p_.mag_dist.rejection_factor * ts, 0.0);
+      d.reject_t_s = std::max(d.reject_t_s - kMagRejectionFactor * ts, 0.0);
     }
   }
   if (h.k_init != 0 && use_init) {

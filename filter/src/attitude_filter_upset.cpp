@@ -8,6 +8,7 @@
 
 #include "mocap/core/units.hpp"
 #include "mocap/filter/attitude_filter.hpp"
+#include "mocap/filter/filter_constants.hpp"
 
 namespace mocap {
 
@@ -30,27 +31,26 @@ void AttitudeFilter::upset_mag(const Eigen::Vector3d& mag) {
   UpsetState& u = st_.upset;
   if (!u.checking) return;
   const Eigen::Vector3d m_i = st_.strapdown.q_gyr * mag;
-  u.mag_lp.step(m_i.data(), c_.upset_mag_lp, p_.upset.tau_s, c_.ts.mag_s);
+  u.mag_lp.step(m_i.data(), c_.upset_mag_lp, kUpsetTau_s, c_.ts.mag_s);
   u.mag_t_s += c_.ts.mag_s;
 }
 
 void AttitudeFilter::check_upset(const Eigen::Vector3d& acc) {
   UpsetState& u = st_.upset;
   if (!u.checking) return;
-  const UpsetParams& p = p_.upset;
   const double ts = c_.ts.acc_s;
   u.since_s += ts;
-  if (u.since_s > p.window_s) {
+  if (u.since_s > kUpsetWindow_s) {
     u.checking = false;
     return;
   }
   const Eigen::Vector3d acc_i = st_.strapdown.q_gyr * acc;
-  const auto& f = u.acc_lp.step(acc_i.data(), c_.upset_acc_lp, p.tau_s, ts);
+  const auto& f = u.acc_lp.step(acc_i.data(), c_.upset_acc_lp, kUpsetTau_s, ts);
   const Eigen::Vector3d fast_i(f[0], f[1], f[2]);
   const double n = fast_i.norm();
   // Settled (2 tau) and about g; else no verdict.
-  if (u.since_s < 2 * p.tau_s ||
-      std::abs(n - kStandardGravity_m_s2) > p.norm_tol * kStandardGravity_m_s2) {
+  if (u.since_s < 2 * kUpsetTau_s ||
+      std::abs(n - kStandardGravity_m_s2) > kUpsetNormTol * kStandardGravity_m_s2) {
     u.hold_t_s = 0;
     return;
   }
@@ -65,7 +65,7 @@ void AttitudeFilter::check_upset(const Eigen::Vector3d& acc) {
   const MagDisturbanceState& d = st_.mag_dist;
   bool field_ok = false;
   double delta_fresh = st_.heading.delta_rad, head_rad = 0;
-  if (d.have_ref && u.mag_t_s >= 2 * p.tau_s) {
+  if (d.have_ref && u.mag_t_s >= 2 * kUpsetTau_s) {
     const auto& m = u.mag_lp.out;
     const Eigen::Vector3d m_e = q_acc_fresh * Eigen::Vector3d(m[0], m[1], m[2]);
     const double mn = m_e.norm();
@@ -77,10 +77,10 @@ void AttitudeFilter::check_upset(const Eigen::Vector3d& acc) {
           std::abs(std::remainder(delta_fresh - st_.heading.delta_rad, 2 * std::numbers::pi));
     }
   }
-  // Verdicts: the inclination lost (over angle_deg); with the inclination confirmed (within
-  // confirm_deg), the heading lost, or both confirmed; else none. The heading is judged only
+  // Verdicts: the inclination lost (over kUpsetAngle_deg); with the inclination confirmed (within
+  // kUpsetConfirm_deg), the heading lost, or both confirmed; else none. The heading is judged only
   // in a confirmed inclination: seen through a wrong one, the field's heading is wrong too.
-  const double angle = p.angle_deg * kRadPerDeg, confirm = p.confirm_deg * kRadPerDeg;
+  const double angle = kUpsetAngle_deg * kRadPerDeg, confirm = kUpsetConfirm_deg * kRadPerDeg;
   const bool incl_lost = incl_rad > angle, incl_ok = incl_rad < confirm;
   const bool head_lost = incl_ok && field_ok && head_rad > angle;
   const bool disagree = incl_lost || head_lost;
@@ -94,13 +94,13 @@ void AttitudeFilter::check_upset(const Eigen::Vector3d& acc) {
   const Eigen::Quaterniond q_fresh =
       Eigen::Quaterniond(Eigen::AngleAxisd(delta_fresh, Eigen::Vector3d::UnitZ())) * q_acc_fresh;
   if (disagree != u.disagree || u.hold_t_s == 0 ||
-      (disagree && q_fresh.angularDistance(u.q_hold) > p.steady_deg * kRadPerDeg)) {
+      (disagree && q_fresh.angularDistance(u.q_hold) > kUpsetSteady_deg * kRadPerDeg)) {
     u.disagree = disagree;
     u.q_hold = q_fresh;
     u.hold_t_s = 0;
   }
   u.hold_t_s += ts;
-  if (u.hold_t_s < p.hold_s) return;
+  if (u.hold_t_s < kUpsetHold_s) return;
   u.hold_t_s = 0;
   if (incl_lost) return recover_upset(q_acc_fresh, delta_fresh, false);  // then the heading
   if (head_lost) recover_upset(q_acc_fresh, delta_fresh, true);

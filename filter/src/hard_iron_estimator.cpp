@@ -104,11 +104,9 @@ void HardIronEstimator::gate(const HardIronCoeffs& k) {
   const double w_size = std::clamp(n / std::max(min_n, 1e-12) - 1.0, 0.0, 1.0);
   const double w_sig = std::clamp(std::sqrt(z2) - k.min_sigmas, 0.0, 1.0);
   used_uT = u * (w_size * w_sig);
-  used_consistent_uT = u * (w_size * std::clamp(std::sqrt(z2) - k.min_sigmas_consistent, 0.0, 1.0));
   used_sigma_uT = w_size * w_sig > 0 ? std::sqrt(lam_used) : 0.0;
-  if (!used_uT.allFinite() || !used_consistent_uT.allFinite()) {
+  if (!used_uT.allFinite()) {
     used_uT.setZero();
-    used_consistent_uT.setZero();
     used_sigma_uT = 0;
   }
 }

@@ -105,14 +105,11 @@ struct MagDisturbanceState {
 /// Hard-iron offset: the estimator and the choice of what it subtracts.
 struct HardIronState {
   HardIronEstimator est;
-  int n = 0;                ///< magnetometer samples since the last estimator step
-  double dt_s = 0;          ///< and their time
-  double select = 0;        ///< low-passed score difference without / with the offset
-  double weight = 0;        ///< weight of the offset applied (0..1)
-  double consistent_s = 0;  ///< time the estimator's innovations have stayed consistent
-  int restarts_seen = 0;    ///< its restart count then
+  int n = 0;          ///< magnetometer samples since the last estimator step
+  double dt_s = 0;    ///< and their time
+  double select = 0;  ///< low-passed score difference without / with the offset
+  double weight = 0;  ///< weight of the offset applied (0..1)
   Eigen::Vector3d applied_uT = Eigen::Vector3d::Zero();  ///< offset subtracted (sensor frame)
-  bool applied_consistent = false;                       ///< ... by the consistency path
 };
 
 /// Upset recovery: the check after a clipped gyro sample.

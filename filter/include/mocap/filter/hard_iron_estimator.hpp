@@ -13,16 +13,15 @@ namespace mocap {
 
 /// Noise and gates, all relative to the field norm F and per second (rate-independent).
 struct HardIronCoeffs {
-  double q_field_rel2_s = 0;         ///< variance growth of c per second, in F^2
-  double q_offset_rel2_s = 0;        ///< variance growth of b per second, in F^2
-  double p0_offset_rel2 = 0;         ///< prior variance of b (and largest), in F^2
-  double r_rel2 = 0;                 ///< measurement variance, in F^2
-  double gate_rel2 = 0;              ///< b directions with variance below this are used, in F^2
-  double min_offset_rel = 0;         ///< offsets smaller than this (x F) are not applied
-  double min_sigmas = 0;             ///< nor offsets less significant than this (sigmas)
-  double min_sigmas_consistent = 0;  ///< the same for used_consistent_uT
-  double k_nis = 0;                  ///< first-order gain of the innovation-consistency average
-  double nis_max = 0;                ///< above this the model (constant c, b) is broken: restart
+  double q_field_rel2_s = 0;   ///< variance growth of c per second, in F^2
+  double q_offset_rel2_s = 0;  ///< variance growth of b per second, in F^2
+  double p0_offset_rel2 = 0;   ///< prior variance of b (and largest), in F^2
+  double r_rel2 = 0;           ///< measurement variance, in F^2
+  double gate_rel2 = 0;        ///< b directions with variance below this are used, in F^2
+  double min_offset_rel = 0;   ///< offsets smaller than this (x F) are not applied
+  double min_sigmas = 0;       ///< nor offsets less significant than this (sigmas)
+  double k_nis = 0;            ///< first-order gain of the innovation-consistency average
+  double nis_max = 0;          ///< above this the model (constant c, b) is broken: restart
 };
 
 struct HardIronEstimator {
@@ -32,10 +31,7 @@ struct HardIronEstimator {
   double f_uT = 0;                                    ///< field norm the noises refer to
   double nis = 1;                                     ///< averaged normalised innovation
   Eigen::Vector3d used_uT = Eigen::Vector3d::Zero();  ///< gated offset, what the filter subtracts
-  double used_sigma_uT = 0;  ///< largest one-sigma of used_uT over its directions (0 = unused)
-  /// Gated as used_uT but with the significance threshold min_sigmas_consistent (what the
-  /// filter subtracts while the estimator's innovations have stayed consistent).
-  Eigen::Vector3d used_consistent_uT = Eigen::Vector3d::Zero();
+  double used_sigma_uT = 0;    ///< largest one-sigma of used_uT over its directions (0 = unused)
   double offset_sigma_uT = 0;  ///< largest one-sigma of b over all directions (each step)
   bool init = false;
   int restarts = 0;
