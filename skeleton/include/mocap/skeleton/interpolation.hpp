@@ -35,10 +35,15 @@ class OrientationTrack {
   /// Adds a key; keys not newer than the newest, or non-finite, are ignored (returns false).
   bool push(int64_t t_ns, const Eigen::Quaterniond& q);
   Sample sample(int64_t t_ns) const;
+  /// What sample() gives when it is bridged: true and q the slerp across the gap; false (q
+  /// untouched) otherwise, without interpolating (the dropout bridge asks every frame).
+  bool bridged(int64_t t_ns, Eigen::Quaterniond& q) const;
   int size() const { return count_; }
   void clear() { count_ = 0; }
 
  private:
+  /// The last key at or before t, for t strictly between the first and the last key.
+  int key_before(int64_t t_ns) const;
   const Eigen::Quaterniond& q_at(int i) const { return q_[(head_ + i) % kCapacity]; }
   int64_t t_at(int i) const { return t_[(head_ + i) % kCapacity]; }
   std::array<int64_t, kCapacity> t_{};
