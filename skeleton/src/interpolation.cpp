@@ -31,6 +31,7 @@ bool OrientationTrack::push(int64_t t_ns, const Eigen::Quaterniond& q) {
   const double n = q.norm();
   if (!std::isfinite(n) || n < 0.5) return false;
   if (count_ > 0 && t_ns <= t_at(count_ - 1)) return false;
+  if (count_ > 0 && t_ns - t_at(count_ - 1) > nominal_gap_ns_) t_after_gap_ns_ = t_ns;
   if (count_ == kCapacity) {
     head_ = (head_ + 1) % kCapacity;
     --count_;
@@ -86,7 +87,8 @@ int OrientationTrack::key_before(int64_t t_ns) const {
 }
 
 bool OrientationTrack::bridged(int64_t t_ns, Eigen::Quaterniond& q) const {
-  if (count_ == 0 || t_ns <= t_at(0) || t_ns >= t_at(count_ - 1)) return false;
+  if (count_ == 0 || t_ns <= t_at(0) || t_ns >= t_at(count_ - 1) || t_ns >= t_after_gap_ns_)
+    return false;
   const int lo = key_before(t_ns), hi = lo + 1;
   const int64_t gap = t_at(hi) - t_at(lo);
   if (t_at(lo) == t_ns || gap > max_bridge_ns_ || gap <= nominal_gap_ns_) return false;

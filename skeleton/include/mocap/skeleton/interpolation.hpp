@@ -39,7 +39,10 @@ class OrientationTrack {
   /// untouched) otherwise, without interpolating (the dropout bridge asks every frame).
   bool bridged(int64_t t_ns, Eigen::Quaterniond& q) const;
   int size() const { return count_; }
-  void clear() { count_ = 0; }
+  void clear() {
+    count_ = 0;
+    t_after_gap_ns_ = INT64_MIN;
+  }
 
  private:
   /// The last key at or before t, for t strictly between the first and the last key.
@@ -50,6 +53,8 @@ class OrientationTrack {
   std::array<Eigen::Quaterniond, kCapacity> q_;
   int head_ = 0, count_ = 0;
   int64_t nominal_gap_ns_, max_bridge_ns_;
+  /// The newest key that follows a gap longer than nominal_gap_ns: no time after it is bridged.
+  int64_t t_after_gap_ns_ = INT64_MIN;
 };
 
 /// Resamples irregularly timed poses to a fixed rate. push() the poses as they come; next()
