@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <stdexcept>
 
@@ -128,10 +129,21 @@ void BvhWriter::write_frame(const PoseFrame& fr) {
   put(root.y(), 5, true);
   put(root.z(), 5, true);
   for (int s = 0; s < kSegmentCount; ++s) {
-    const Eigen::Quaterniond q = from_wxyz(s == 0 ? fr.q_earth_segment[0] : fr.q_parent_segment[s]);
+    const std::array<float, 4>& wxyz = s == 0 ? fr.q_earth_segment[0] : fr.q_parent_segment[s];
+    LastRotation& last = last_[s];
+    if (last.length > 0 && std::memcmp(last.wxyz.data(), wxyz.data(), sizeof wxyz) == 0) {
+      std::memcpy(out, last.text, static_cast<std::size_t>(last.length));
+      out += last.length;
+      continue;
+    }
+    char* const begin = out;
+    const Eigen::Quaterniond q = from_wxyz(wxyz);
     const Eigen::Vector3d e = zxy_degrees_from_rotation(c * q.normalized() * ci);
     for (int k = 0; k < 3; ++k)
       put(e[k], 6, true);
+    last.wxyz = wxyz;
+    last.length = static_cast<int>(out - begin);
+    std::memcpy(last.text, begin, static_cast<std::size_t>(last.length));
   }
   *out++ = '\n';
   std::fwrite(line, 1, static_cast<std::size_t>(out - line), f_);
