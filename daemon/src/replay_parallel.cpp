@@ -172,7 +172,9 @@ ReplayResult run_replay_parallel(SampleSource& src, PipelineCore& core, const Re
   // Per-sensor task lists; the chunk is prefilterable only if nothing can hand the filters
   // anything meanwhile (no capture, no countdown, no request in it).
   auto prepare = [&](Chunk& c, bool at_request) {
-    c.by_sensor.assign(sensors, {});
+    c.by_sensor.resize(sensors);  // the lists keep their memory from chunk to chunk
+    for (auto& list : c.by_sensor)
+      list.clear();
     if (at_request || !engine.prefilter_allowed() || core.calibrating()) return false;
     c.outputs.resize(c.samples.size());
     for (std::size_t k = 0; k < c.samples.size(); ++k)

@@ -44,13 +44,18 @@ struct Put {
   }
 };
 
-/// Sequential bounds-checked little-endian reader; any overrun sets ok = false.
-struct Get {
+/// Sequential bounds-checked little-endian reader; any overrun sets ok = false. kChecked false:
+/// no checks, for a payload whose size was checked against its fixed layout (a replay decodes
+/// millions of samples).
+template <bool kChecked>
+struct GetBytes {
   const uint8_t* p;
   const uint8_t* end;
   bool ok = true;
   bool need(std::size_t n) {
-    if (!ok || static_cast<std::size_t>(end - p) < n) ok = false;
+    if constexpr (kChecked) {
+      if (!ok || static_cast<std::size_t>(end - p) < n) ok = false;
+    }
     return ok;
   }
   uint8_t u8() { return need(1) ? *p++ : 0; }
@@ -95,6 +100,8 @@ struct Get {
     return true;
   }
 };
+
+using Get = GetBytes<true>;
 
 bool finite_all(const float* v, int n) {
   for (int i = 0; i < n; ++i)
@@ -236,8 +243,8 @@ void encode_sample(const ImuSample& s, uint8_t* out) noexcept {
 }
 
 bool decode_sample(std::span<const uint8_t> payload, ImuSample& s) noexcept {
-  if (payload.size() != kSamplePayloadBytes) return false;
-  Get r{payload.data(), payload.data() + payload.size()};
+  if (payload.size() != kSamplePayloadBytes) return false;  // the fields' fixed size
+  GetBytes<false> r{payload.data(), payload.data() + payload.size()};
   sample_fields(r, s);
   return r.ok && s.gyr_rad_s.allFinite() && s.acc_m_s2.allFinite() && s.mag_uT.allFinite() &&
          s.q_device_sensor.coeffs().allFinite();

@@ -4,7 +4,9 @@
 // tail ends reading.
 #include "mocap/session/session_reader.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 #include <zstd.h>
 
 #include <algorithm>
@@ -94,44 +96,60 @@ int64_t block_time(const SessionReader::Block& b) {
 }  // namespace
 
 SessionReader::~SessionReader() {
-  if (file_) std::fclose(file_);
+  if (fd_ >= 0) ::close(fd_);
   if (dctx_) ZSTD_freeDCtx(static_cast<ZSTD_DCtx*>(dctx_));
 }
 
 bool SessionReader::open(const std::string& path, std::string* error) {
-  if (file_) std::fclose(file_);
+  if (fd_ >= 0) ::close(fd_);
   memory_.clear();
-  file_ = std::fopen(path.c_str(), "rb");
-  file_pos_ = 0;
-  if (!file_) {
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  buffer_offset_ = buffer_len_ = 0;
+  if (fd_ < 0) {
     if (error) *error = "cannot open session file '" + path + "': " + std::strerror(errno);
     return false;
   }
-  // Reading ahead in 1 MiB blocks instead of stdio's 4 KiB: a long replay reads hundreds of
-  // megabytes, a block of ~140 bytes at a time.
+  // Reading ahead in 1 MiB blocks: a long replay reads hundreds of megabytes, a block of ~140
+  // bytes at a time (as two reads: header, then payload and checksum).
   file_buffer_.resize(1 << 20);
-  std::setvbuf(file_, file_buffer_.data(), _IOFBF, file_buffer_.size());
   struct stat st {};
-  size_ = ::fstat(fileno(file_), &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0;
+  size_ = ::fstat(fd_, &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0;
   return read_header("'" + path + "'", error);
 }
 
 bool SessionReader::open_bytes(std::span<const uint8_t> bytes, std::string* error) {
-  if (file_) std::fclose(file_);
-  file_ = nullptr;
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
   memory_.assign(bytes.begin(), bytes.end());
   size_ = memory_.size();
   return read_header("session data", error);
 }
 
+std::size_t SessionReader::pread_full(uint64_t offset, uint8_t* dst, std::size_t n) {
+  std::size_t got = 0;
+  while (got < n) {
+    const ssize_t r = ::pread(fd_, dst + got, n - got, static_cast<off_t>(offset + got));
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) break;
+    got += static_cast<std::size_t>(r);
+  }
+  return got;
+}
+
 std::size_t SessionReader::read_at(uint64_t offset, uint8_t* dst, std::size_t n) {
-  if (file_) {
-    if (offset != file_pos_) {
-      if (::fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0) return 0;
-      file_pos_ = offset;
+  if (fd_ >= 0) {
+    // Served from file_buffer_ (refilled at `offset` when it does not hold the range): no
+    // stdio call, no lock, per block. Larger reads go to dst directly.
+    if (offset < buffer_offset_ || offset + n > buffer_offset_ + buffer_len_) {
+      if (n >= file_buffer_.size()) return pread_full(offset, dst, n);
+      buffer_offset_ = offset;
+      buffer_len_ =
+          pread_full(offset, reinterpret_cast<uint8_t*>(file_buffer_.data()), file_buffer_.size());
     }
-    const std::size_t got = std::fread(dst, 1, n, file_);
-    file_pos_ += got;
+    if (offset >= buffer_offset_ + buffer_len_) return 0;
+    const std::size_t got =
+        std::min<std::size_t>(n, static_cast<std::size_t>(buffer_offset_ + buffer_len_ - offset));
+    std::memcpy(dst, file_buffer_.data() + (offset - buffer_offset_), got);
     return got;
   }
   if (offset >= memory_.size()) return 0;
@@ -444,7 +462,7 @@ uint64_t SessionReader::resync(uint64_t from, Block& scratch, uint64_t limit) {
 
 bool SessionReader::next(Block& block) {
   if (end_ != End::not_reached) return false;
-  if (!file_ && memory_.empty()) return stop(End::corrupt, "no session open");
+  if (fd_ < 0 && memory_.empty()) return stop(End::corrupt, "no session open");
   for (;;) {
     if (group_pos_ < group_len_) {  // the blocks of an unpacked compressed block
       const Parse p = next_inner(block);

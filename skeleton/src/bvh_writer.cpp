@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <stdexcept>
 
@@ -111,23 +112,38 @@ void BvhWriter::write_frame(const PoseFrame& fr) {
   // One line per frame, formatted with to_chars_fixed (std::to_chars' digits, the same as
   // printf "%.Nf", several times faster: the numbers dominate long offline exports) and written
   // with a single fwrite.
-  char line[(kSegmentCount * 3 + 3) * 24 + 8];  // 51 values of at most 24 characters
+  // 51 values of at most 24 characters; to_chars_fixed takes its fast path only with room for
+  // its longest result (sign, 19 digits, point, decimals), so each value gets 32 to write into.
+  constexpr int kShare = 24, kRoom = 32;
+  char line[(kSegmentCount * 3 + 3 - 1) * kShare + kRoom + 8];
   char* out = line;
   auto put = [&](double v, int precision, bool space) {
     if (space) *out++ = ' ';
     // A value too long for its 24-character share (|v| >= 1e15) is not a body pose.
-    const auto r = to_chars_fixed(out, out + 23, v, precision);
-    if (r.ec != std::errc{}) throw std::runtime_error(path_ + ": value out of range for BVH");
+    const auto r = to_chars_fixed(out, out + kRoom - 1, v, precision);
+    if (r.ec != std::errc{} || r.ptr - out > kShare - 1)
+      throw std::runtime_error(path_ + ": value out of range for BVH");
     out = r.ptr;
   };
   put(root.x(), 5, false);
   put(root.y(), 5, true);
   put(root.z(), 5, true);
   for (int s = 0; s < kSegmentCount; ++s) {
-    const Eigen::Quaterniond q = from_wxyz(s == 0 ? fr.q_earth_segment[0] : fr.q_parent_segment[s]);
+    const std::array<float, 4>& wxyz = s == 0 ? fr.q_earth_segment[0] : fr.q_parent_segment[s];
+    LastRotation& last = last_[s];
+    if (last.length > 0 && std::memcmp(last.wxyz.data(), wxyz.data(), sizeof wxyz) == 0) {
+      std::memcpy(out, last.text, static_cast<std::size_t>(last.length));
+      out += last.length;
+      continue;
+    }
+    char* const begin = out;
+    const Eigen::Quaterniond q = from_wxyz(wxyz);
     const Eigen::Vector3d e = zxy_degrees_from_rotation(c * q.normalized() * ci);
     for (int k = 0; k < 3; ++k)
       put(e[k], 6, true);
+    last.wxyz = wxyz;
+    last.length = static_cast<int>(out - begin);
+    std::memcpy(last.text, begin, static_cast<std::size_t>(last.length));
   }
   *out++ = '\n';
   std::fwrite(line, 1, static_cast<std::size_t>(out - line), f_);

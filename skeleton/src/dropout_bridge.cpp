@@ -1,6 +1,7 @@
 // Dropout bridging of a pose stream (see dropout_bridge.hpp).
 #include "mocap/skeleton/dropout_bridge.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "mocap/skeleton/forward_kinematics.hpp"
@@ -9,14 +10,19 @@
 namespace mocap {
 namespace {
 
-/// Age of the newest sample of the sensor driving segment s, ns; -1 if none drives it.
-int64_t sample_age_ns(const PoseFrame& f, int s) {
+/// Per segment, the age of the newest sample of the (first listed) sensor driving it, ns; -1 if
+/// none drives it.
+std::array<int64_t, kSegmentCount> sample_ages_ns(const PoseFrame& f) {
+  std::array<int64_t, kSegmentCount> age;
+  age.fill(-1);
   const uint32_t n = std::min<uint32_t>(f.sensor_count, kMaxSensors);
-  for (uint32_t k = 0; k < n; ++k)
-    if (f.sensors[k].segment == s && std::isfinite(f.sensors[k].last_age_ms) &&
-        f.sensors[k].last_age_ms >= 0)
-      return static_cast<int64_t>(std::llround(f.sensors[k].last_age_ms * 1e6));
-  return -1;
+  for (uint32_t k = 0; k < n; ++k) {
+    const SensorStatus& st = f.sensors[k];
+    if (st.segment >= 0 && st.segment < kSegmentCount && age[st.segment] < 0 &&
+        std::isfinite(st.last_age_ms) && st.last_age_ms >= 0)
+      age[st.segment] = static_cast<int64_t>(std::llround(st.last_age_ms * 1e6));
+  }
+  return age;
 }
 
 }  // namespace
@@ -29,21 +35,30 @@ DropoutBridge::DropoutBridge(const BodyDimensions& dims, int64_t nominal_gap_ns,
 }
 
 void DropoutBridge::push(const PoseFrame& f) {
-  if (!queue_.empty() && f.t_ns <= queue_.back().t_ns) return;
+  if (count_ > 0 && f.t_ns <= queued(count_ - 1).t_ns) return;
+  const std::array<int64_t, kSegmentCount> ages_ns = sample_ages_ns(f);
   for (int s = 0; s < kSegmentCount; ++s) {
-    const int64_t age_ns = sample_age_ns(f, s);
+    const int64_t age_ns = ages_ns[s];
     // A key per new sample: a held orientation repeats the same sample time and is ignored.
     if (age_ns >= 0 && (f.segment_flags[s] & kSegTracked))
       tracks_[s].push(f.t_ns - age_ns, from_wxyz(f.q_earth_segment[s]));
   }
-  queue_.push_back(f);
+  if (count_ == ring_.size()) {
+    std::vector<PoseFrame> grown(std::max<std::size_t>(64, 2 * ring_.size()));
+    for (std::size_t i = 0; i < count_; ++i)
+      grown[i] = queued(i);
+    ring_.swap(grown);
+    head_ = 0;
+  }
+  queued(count_++) = f;
 }
 
 bool DropoutBridge::next(PoseFrame& out) {
-  if (queue_.empty()) return false;
-  if (!finished_ && queue_.back().t_ns - queue_.front().t_ns < max_bridge_ns_) return false;
-  out = queue_.front();
-  queue_.pop_front();
+  if (count_ == 0) return false;
+  if (!finished_ && queued(count_ - 1).t_ns - queued(0).t_ns < max_bridge_ns_) return false;
+  out = queued(0);
+  head_ = (head_ + 1) % ring_.size();
+  --count_;
   std::array<Eigen::Quaterniond, kSegmentCount> q;
   bool changed = false;
   for (int s = 0; s < kSegmentCount; ++s) {
@@ -51,9 +66,7 @@ bool DropoutBridge::next(PoseFrame& out) {
     if (!(out.segment_flags[s] & kSegTracked)) continue;
     // Bridged: the frame falls between two of the segment's samples further apart than
     // nominal_gap_ns (and at most max_bridge_ns).
-    const OrientationTrack::Sample smp = tracks_[s].sample(out.t_ns);
-    if (!smp.valid || !smp.bridged) continue;
-    q[s] = smp.q;
+    if (!tracks_[s].bridged(out.t_ns, q[s])) continue;
     changed = true;
     ++bridged_;
   }

@@ -31,6 +31,7 @@ bool OrientationTrack::push(int64_t t_ns, const Eigen::Quaterniond& q) {
   const double n = q.norm();
   if (!std::isfinite(n) || n < 0.5) return false;
   if (count_ > 0 && t_ns <= t_at(count_ - 1)) return false;
+  if (count_ > 0 && t_ns - t_at(count_ - 1) > nominal_gap_ns_) t_after_gap_ns_ = t_ns;
   if (count_ == kCapacity) {
     head_ = (head_ + 1) % kCapacity;
     --count_;
@@ -56,15 +57,7 @@ OrientationTrack::Sample OrientationTrack::sample(int64_t t_ns) const {
     s.held = t_ns > t_at(count_ - 1);
     return s;
   }
-  // Binary search for the last key at or before t.
-  int lo = 0, hi = count_ - 1;
-  while (hi - lo > 1) {
-    const int mid = (lo + hi) / 2;
-    if (t_at(mid) <= t_ns)
-      lo = mid;
-    else
-      hi = mid;
-  }
+  const int lo = key_before(t_ns), hi = lo + 1;
   if (t_at(lo) == t_ns) {  // a key itself: measured, not bridged
     s.q = q_at(lo);
     return s;
@@ -79,6 +72,29 @@ OrientationTrack::Sample OrientationTrack::sample(int64_t t_ns) const {
   s.q = slerp_shortest(q_at(lo), q_at(hi),
                        static_cast<double>(t_ns - t_at(lo)) / static_cast<double>(gap));
   return s;
+}
+
+int OrientationTrack::key_before(int64_t t_ns) const {
+  int lo = 0, hi = count_ - 1;  // binary search
+  while (hi - lo > 1) {
+    const int mid = (lo + hi) / 2;
+    if (t_at(mid) <= t_ns)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  return lo;
+}
+
+bool OrientationTrack::bridged(int64_t t_ns, Eigen::Quaterniond& q) const {
+  if (count_ == 0 || t_ns <= t_at(0) || t_ns >= t_at(count_ - 1) || t_ns >= t_after_gap_ns_)
+    return false;
+  const int lo = key_before(t_ns), hi = lo + 1;
+  const int64_t gap = t_at(hi) - t_at(lo);
+  if (t_at(lo) == t_ns || gap > max_bridge_ns_ || gap <= nominal_gap_ns_) return false;
+  q = slerp_shortest(q_at(lo), q_at(hi),
+                     static_cast<double>(t_ns - t_at(lo)) / static_cast<double>(gap));
+  return true;
 }
 
 PoseResampler::PoseResampler(double rate_hz) {

@@ -43,6 +43,15 @@ TEST(FixedChars, SameCharactersAsToCharsForRandomValues) {
   EXPECT_EQ(checked, 300000);
 }
 
+TEST(FixedChars, IntegerPartsAcrossTheirDigitCounts) {
+  // The integer part is written from a table below 1000, by std::to_chars above: each width,
+  // and values that round up into the next one.
+  for (const double v : {0.0, 9.0, 9.9999996, 10.0, 99.5, 99.9999996, 100.0, 999.25, 999.9999996,
+                         1000.0, 1234.5, -7.25, -99.9999996, -999.9999996, 180.0, -179.999999})
+    for (int precision = 0; precision <= 9; ++precision)
+      EXPECT_EQ(ours(v, precision), expected(v, precision)) << v << " at " << precision;
+}
+
 TEST(FixedChars, TiesRoundToEvenAndSignsStay) {
   // Dyadic values whose decimal expansion ends exactly half-way at the precision asked for.
   for (int precision = 0; precision <= 9; ++precision)

@@ -50,6 +50,17 @@ TEST(Interpolation, TrackBridgesShortDropoutsOnly) {
   s = tr.sample(2000 * kMs);
   EXPECT_TRUE(s.held);
   EXPECT_NEAR(yaw_of_rad(s.q), 1.30, 1e-9);
+  // bridged(): the same verdict and orientation as sample(), at keys, in gaps, outside.
+  int bridged_count = 0;
+  for (int64_t t = -10 * kMs; t <= 2100 * kMs; t += 5 * kMs) {
+    const auto smp = tr.sample(t);
+    Eigen::Quaterniond q(0, 0, 0, 0);
+    ASSERT_EQ(tr.bridged(t, q), smp.bridged) << t;
+    if (!smp.bridged) continue;
+    ++bridged_count;
+    EXPECT_EQ(q.coeffs(), smp.q.coeffs()) << t;
+  }
+  EXPECT_EQ(bridged_count, 39);  // 105..295 ms: the 200 ms gap
   // Capacity: the oldest keys drop out.
   for (int k = 0; k < 2 * OrientationTrack::kCapacity; ++k)
     tr.push((2000 + k) * kMs, Eigen::Quaterniond::Identity());

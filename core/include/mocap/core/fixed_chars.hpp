@@ -55,15 +55,36 @@ inline std::to_chars_result to_chars_fixed(char* first, char* last, double v, in
     return std::to_chars(first, last, v, std::chars_format::fixed, precision);
   char* p = first;
   if (negative) *p++ = '-';
+  // Digits two at a time from a table (a pose's integer part is below 1000).
+  static constexpr char kPairs[] =
+      "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+      "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+      "8081828384858687888990919293949596979899";
   const uint64_t scale = kPow10[precision];
-  p = std::to_chars(p, last, q / scale).ptr;
+  const uint64_t whole = q / scale;
+  if (whole < 10) {
+    *p++ = static_cast<char>('0' + whole);
+  } else if (whole < 100) {
+    std::memcpy(p, kPairs + 2 * whole, 2);
+    p += 2;
+  } else if (whole < 1000) {
+    *p++ = static_cast<char>('0' + whole / 100);
+    std::memcpy(p, kPairs + 2 * (whole % 100), 2);
+    p += 2;
+  } else {
+    p = std::to_chars(p, last, whole).ptr;
+  }
   if (precision > 0) {
     *p++ = '.';
     uint64_t frac = q % scale;
-    for (int i = precision - 1; i >= 0; --i) {
-      p[i] = static_cast<char>('0' + frac % 10);
-      frac /= 10;
+    char* d = p + precision;
+    int left = precision;
+    for (; left >= 2; left -= 2) {
+      d -= 2;
+      std::memcpy(d, kPairs + 2 * (frac % 100), 2);
+      frac /= 100;
     }
+    if (left == 1) *--d = static_cast<char>('0' + frac);
     p += precision;
   }
   return {p, std::errc{}};

@@ -3,8 +3,10 @@
 // Shared by SessionWriter and SessionReader; no I/O here.
 #pragma once
 
+#include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <string>
 #include <vector>
@@ -104,33 +106,49 @@ void encode_raw_prefix(uint16_t device_index, int64_t t_host_ns, uint8_t* out) n
 /// Writes the 8-byte block header for a payload of the given size.
 void encode_block_header(BlockType type, uint32_t payload_len, uint8_t* out) noexcept;
 
-// Little-endian primitives (explicit byte order, independent of the host).
+// Little-endian primitives (explicit byte order, independent of the host): one load or store,
+// swapped on a big-endian host (byte-by-byte loops did not compile to single loads, and a
+// replay decodes millions of fields).
+inline uint16_t to_little_endian(uint16_t v) {
+  if constexpr (std::endian::native == std::endian::big) return __builtin_bswap16(v);
+  return v;
+}
+inline uint32_t to_little_endian(uint32_t v) {
+  if constexpr (std::endian::native == std::endian::big) return __builtin_bswap32(v);
+  return v;
+}
+inline uint64_t to_little_endian(uint64_t v) {
+  if constexpr (std::endian::native == std::endian::big) return __builtin_bswap64(v);
+  return v;
+}
+template <typename T>
+inline void put_le(uint8_t* p, T v) {
+  v = to_little_endian(v);
+  std::memcpy(p, &v, sizeof v);
+}
+template <typename T>
+inline T get_le(const uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return to_little_endian(v);
+}
 inline void put_u16(uint8_t* p, uint16_t v) {
-  p[0] = static_cast<uint8_t>(v);
-  p[1] = static_cast<uint8_t>(v >> 8);
+  put_le(p, v);
 }
 inline void put_u32(uint8_t* p, uint32_t v) {
-  for (int i = 0; i < 4; ++i)
-    p[i] = static_cast<uint8_t>(v >> (8 * i));
+  put_le(p, v);
 }
 inline void put_u64(uint8_t* p, uint64_t v) {
-  for (int i = 0; i < 8; ++i)
-    p[i] = static_cast<uint8_t>(v >> (8 * i));
+  put_le(p, v);
 }
 inline uint16_t get_u16(const uint8_t* p) {
-  return static_cast<uint16_t>(p[0] | (static_cast<uint16_t>(p[1]) << 8));
+  return get_le<uint16_t>(p);
 }
 inline uint32_t get_u32(const uint8_t* p) {
-  uint32_t v = 0;
-  for (int i = 0; i < 4; ++i)
-    v |= static_cast<uint32_t>(p[i]) << (8 * i);
-  return v;
+  return get_le<uint32_t>(p);
 }
 inline uint64_t get_u64(const uint8_t* p) {
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i)
-    v |= static_cast<uint64_t>(p[i]) << (8 * i);
-  return v;
+  return get_le<uint64_t>(p);
 }
 
 }  // namespace mocap::session

@@ -112,10 +112,13 @@ class SessionReader {
   /// The offset of the next valid block after `from` (UINT64_MAX if none).
   uint64_t resync(uint64_t from, Block& scratch, uint64_t limit);
 
-  /// file_'s stdio buffer: reads come in large blocks (a block is read as two small freads).
+  /// Reads up to n bytes at offset from fd_ (fewer only at the end of the file or on an error).
+  std::size_t pread_full(uint64_t offset, uint8_t* dst, std::size_t n);
+  /// The file's bytes [buffer_offset_, buffer_offset_ + buffer_len_): read_at reads in large
+  /// blocks (a block is read as two small reads).
   std::vector<char> file_buffer_;
-  std::FILE* file_ = nullptr;
-  uint64_t file_pos_ = 0;  ///< where file_'s stream stands
+  uint64_t buffer_offset_ = 0, buffer_len_ = 0;
+  int fd_ = -1;
   std::vector<uint8_t> memory_;
   uint64_t size_ = 0;
   uint64_t offset_ = 0;

@@ -9,7 +9,7 @@
 
 #include <array>
 #include <cstdint>
-#include <deque>
+#include <vector>
 
 #include "mocap/skeleton/body_model.hpp"
 #include "mocap/skeleton/interpolation.hpp"
@@ -36,7 +36,11 @@ class DropoutBridge {
   BodyDimensions dims_;
   int64_t max_bridge_ns_;
   std::array<OrientationTrack, kSegmentCount> tracks_;
-  std::deque<PoseFrame> queue_;
+  /// The queued poses, oldest first: a ring over ring_, doubled when full and never shrunk (no
+  /// allocation per pose once it holds max_bridge_ns of them; a deque allocated every pose).
+  std::vector<PoseFrame> ring_;
+  std::size_t head_ = 0, count_ = 0;
+  PoseFrame& queued(std::size_t i) { return ring_[(head_ + i) % ring_.size()]; }
   bool finished_ = false;
   long bridged_ = 0;
 };

@@ -35,16 +35,26 @@ class OrientationTrack {
   /// Adds a key; keys not newer than the newest, or non-finite, are ignored (returns false).
   bool push(int64_t t_ns, const Eigen::Quaterniond& q);
   Sample sample(int64_t t_ns) const;
+  /// What sample() gives when it is bridged: true and q the slerp across the gap; false (q
+  /// untouched) otherwise, without interpolating (the dropout bridge asks every frame).
+  bool bridged(int64_t t_ns, Eigen::Quaterniond& q) const;
   int size() const { return count_; }
-  void clear() { count_ = 0; }
+  void clear() {
+    count_ = 0;
+    t_after_gap_ns_ = INT64_MIN;
+  }
 
  private:
+  /// The last key at or before t, for t strictly between the first and the last key.
+  int key_before(int64_t t_ns) const;
   const Eigen::Quaterniond& q_at(int i) const { return q_[(head_ + i) % kCapacity]; }
   int64_t t_at(int i) const { return t_[(head_ + i) % kCapacity]; }
   std::array<int64_t, kCapacity> t_{};
   std::array<Eigen::Quaterniond, kCapacity> q_;
   int head_ = 0, count_ = 0;
   int64_t nominal_gap_ns_, max_bridge_ns_;
+  /// The newest key that follows a gap longer than nominal_gap_ns: no time after it is bridged.
+  int64_t t_after_gap_ns_ = INT64_MIN;
 };
 
 /// Resamples irregularly timed poses to a fixed rate. push() the poses as they come; next()
