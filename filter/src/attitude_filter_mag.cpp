@@ -74,7 +74,7 @@ double AttitudeFilter::heading_innovation(const Eigen::Vector3d& m_e) const {
   const Eigen::Quaterniond& q = st_.heading.q_delta;
   const double cd = q.w() * q.w() - q.z() * q.z(), sd = 2 * q.w() * q.z();
   const double along = m_e.y() * cd + m_e.x() * sd, across = m_e.x() * cd - m_e.y() * sd;
-  if (along > 0 && std::abs(across) * 16 <= along) return atan_small(across / along);
+  if (along > 0 && std::abs(across) <= kAtanMax * along) return atan_small(across / along);
   return wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.heading.delta_rad);
 }
 
