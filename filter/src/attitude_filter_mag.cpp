@@ -22,8 +22,13 @@ double wrap_pi(double a) {
   return a;
 }
 
-/// Dip of an earth-frame field of norm n (rad, positive when the field points down).
-double dip_rad(const Eigen::Vector3d& m_e, double n) {
+/// Dip of an earth-frame field of norm n (rad, positive when the field points down), expected
+/// near near_rad: atan2(-z, horizontal norm) by the series around the grid angle nearest to it
+/// (no asin: a field sample's dip is within a few degrees of the smoothed one nearly always).
+double dip_rad(const Eigen::Vector3d& m_e, double n, double near_rad) {
+  double dip;
+  if (atan2_near(-m_e.z(), std::sqrt(m_e.x() * m_e.x() + m_e.y() * m_e.y()), near_rad, dip))
+    return dip;
   return -std::asin(std::clamp(m_e.z() / n, -1.0, 1.0));
 }
 
@@ -74,7 +79,7 @@ double AttitudeFilter::heading_innovation(const Eigen::Vector3d& m_e) const {
   const Eigen::Quaterniond& q = st_.heading.q_delta;
   const double cd = q.w() * q.w() - q.z() * q.z(), sd = 2 * q.w() * q.z();
   const double along = m_e.y() * cd + m_e.x() * sd, across = m_e.x() * cd - m_e.y() * sd;
-  if (along > 0 && std::abs(across) <= kAtanMax * along) return atan_small(across / along);
+  if (along > 0 && std::abs(across) <= kAtanQuarterMax * along) return atan_quarter(across / along);
   return wrap_pi(std::atan2(m_e.x(), m_e.y()) - st_.heading.delta_rad);
 }
 
@@ -109,7 +114,9 @@ void AttitudeFilter::select_hard_iron(const Eigen::Vector3d& m_raw_e,
     auto score = [&](const Eigen::Vector3d& m) {
       const double n = m.norm();
       if (!(n > 0)) return 0.0;
-      return std::min(field_deviation2(n, dip_rad(m, n), ref_norm, st_.mag_dist.ref_dip), 25.0);
+      return std::min(
+          field_deviation2(n, dip_rad(m, n, st_.mag_dist.ref_dip), ref_norm, st_.mag_dist.ref_dip),
+          25.0);
     };
     hs.select += c_.hard_iron.k_select * (score(m_raw_e) - score(m_corr_e) - hs.select);
     hs.weight = std::clamp(hs.select / kHardIronSelectMargin, 0.0, 1.0);
@@ -138,7 +145,7 @@ void AttitudeFilter::update_mag_disturbance(const Eigen::Vector3d& m_e, double e
   const MagDisturbanceParams& p = p_.mag_dist;
   const double ts = c_.ts.mag_s;
   const double n = m_e.norm();
-  const double nd[2] = {n, dip_rad(m_e, n)};
+  const double nd[2] = {n, dip_rad(m_e, n, d.norm_dip[1])};
   const auto& f = d.norm_dip_lp.step(nd, c_.mag_dist.norm_dip_lp, kMagCurrentTau_s, ts);
   d.norm_dip[0] = f[0];
   d.norm_dip[1] = f[1];
