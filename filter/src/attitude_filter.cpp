@@ -312,15 +312,11 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
   }
   const Eigen::Matrix<double, 2, 9>& reg = st_.gyr_gain.reg;
   if (p_.bias.motion_est) {
-    // Row-major copy so the 9 channels are the rows of R.
-    double rr[9];
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        rr[3 * i + j] = r6(i, j);
-    const auto& rl = st_.bias.motion_r_lp.step(rr, c_.bias.lp, p_.inclination.tau_acc_s, ts);
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        r_lp(i, j) = rl[3 * i + j];
+    // Row-major copy so the 9 channels are the rows of R (fixed-size copies, unrolled).
+    using RowMajor3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+    const RowMajor3 rr = r6;
+    const auto& rl = st_.bias.motion_r_lp.step(rr.data(), c_.bias.lp, p_.inclination.tau_acc_s, ts);
+    r_lp = Eigen::Map<const RowMajor3>(rl.data());
     const double rb[2] = {r6.row(0).dot(b_applied), r6.row(1).dot(b_applied)};
     const auto& bl = st_.bias.motion_bias_lp.step(rb, c_.bias.lp, p_.inclination.tau_acc_s, ts);
     rb_lp = Eigen::Vector2d(bl[0], bl[1]);
@@ -384,16 +380,13 @@ void AttitudeFilter::update_gain_regressor(const Eigen::Matrix3d& r6, const Eige
     for (int i = 0; i < 3; ++i)
       st_.gyr_gain.reg_sum.block<1, 3>(r, 3 * i) += r6(r, i) * w.transpose();
   if (++st_.gyr_gain.reg_n >= c_.gyr_gain.reg_decim) {
-    double g[18];
+    // Row-major: channel 9 r + k is entry (r, k).
+    using RowMajor29 = Eigen::Matrix<double, 2, 9, Eigen::RowMajor>;
     const double inv = 1.0 / st_.gyr_gain.reg_n;
-    for (int r = 0; r < 2; ++r)
-      for (int k = 0; k < 9; ++k)
-        g[9 * r + k] = st_.gyr_gain.reg_sum(r, k) * inv;
-    const auto& gl = st_.gyr_gain.reg_lp.step(g, c_.gyr_gain.reg_lp, p_.inclination.tau_acc_s,
-                                              ts * c_.gyr_gain.reg_decim);
-    for (int r = 0; r < 2; ++r)
-      for (int k = 0; k < 9; ++k)
-        st_.gyr_gain.reg(r, k) = gl[9 * r + k];
+    const RowMajor29 g = st_.gyr_gain.reg_sum * inv;
+    const auto& gl = st_.gyr_gain.reg_lp.step(g.data(), c_.gyr_gain.reg_lp,
+                                              p_.inclination.tau_acc_s, ts * c_.gyr_gain.reg_decim);
+    st_.gyr_gain.reg = Eigen::Map<const RowMajor29>(gl.data());
     st_.gyr_gain.reg_sum.setZero();
     st_.gyr_gain.reg_n = 0;
   }
