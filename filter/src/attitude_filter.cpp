@@ -376,9 +376,11 @@ void AttitudeFilter::update_bias(const Eigen::Vector3d& acc_e, double ts) {
 // tau_acc is seconds).
 void AttitudeFilter::update_gain_regressor(const Eigen::Matrix3d& r6, const Eigen::Vector3d& w,
                                            double ts) {
-  for (int r = 0; r < 2; ++r)
-    for (int i = 0; i < 3; ++i)
-      st_.gyr_gain.reg_sum.block<1, 3>(r, 3 * i) += r6(r, i) * w.transpose();
+  // Entry (r, 3 i + j) += R_ri w_j: per i a 2x3 outer product (fixed-size blocks, unrolled).
+  Eigen::Matrix<double, 2, 9>& rs = st_.gyr_gain.reg_sum;
+  rs.middleCols<3>(0) += r6.block<2, 1>(0, 0) * w.transpose();
+  rs.middleCols<3>(3) += r6.block<2, 1>(0, 1) * w.transpose();
+  rs.middleCols<3>(6) += r6.block<2, 1>(0, 2) * w.transpose();
   if (++st_.gyr_gain.reg_n >= c_.gyr_gain.reg_decim) {
     // Row-major: channel 9 r + k is entry (r, k).
     using RowMajor29 = Eigen::Matrix<double, 2, 9, Eigen::RowMajor>;
