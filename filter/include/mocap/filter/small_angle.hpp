@@ -1,7 +1,8 @@
 // Rotations by small angles without libm calls, for the attitude filter's per-sample path: cos x,
-// sin(x)/x and atan x from their Taylor series, and a renormalisation of a quaternion that is unit
-// up to rounding. Hand-written because the sincos, atan2, square roots and divisions they replace
-// were a fifth of the filter's time per update (docs/filter.md, "Cost").
+// sin(x)/x and atan x from their Taylor series, atan2 near a known angle (the field's dip) from a
+// grid of anchors, and a renormalisation of a quaternion that is unit up to rounding.
+// Hand-written because the sincos, atan2, asin, square roots and divisions they replace were a
+// fifth of the filter's time per update (docs/filter.md, "Cost").
 #pragma once
 
 #include <Eigen/Geometry>
@@ -88,9 +89,10 @@ inline constexpr std::array<AngleGridEntry, 2 * kAngleGridHalf + 1> kAngleGrid =
     detail::make_angle_grid();
 
 /// atan2(y, x) for a direction near the angle near_rad (|near_rad| < pi / 2): the grid anchor a
-/// nearest to it plus atan_small of the direction turned back by a. False (angle untouched) when
-/// the direction is more than atan(1/16) - 1/128 from near_rad (about 3.1 deg), or near_rad is
-/// off the grid (or NaN).
+/// nearest to it (within 1/128 rad) plus atan_small of the direction turned back by a. False
+/// (angle untouched) when the direction is more than atan(1/16) from a (so it is taken whenever
+/// it is within atan(1/16) - 1/128, about 3.1 deg, of near_rad), or near_rad is off the grid or
+/// NaN.
 inline bool atan2_near(double y, double x, double near_rad, double& angle) {
   const double i_d = near_rad * 64 + (kAngleGridHalf + 0.5);  // the index, rounded when truncated
   if (!(i_d >= 0 && i_d < 2 * kAngleGridHalf + 1)) return false;
