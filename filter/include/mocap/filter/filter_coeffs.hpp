@@ -38,10 +38,6 @@ struct HeadingCoeffs {
   double inv_tau_mag_s = 0;          ///< 1 / tau_mag_s (multiplied: no division per sample)
 };
 
-/// s, smoothing of the heading innovation for the disturbance test (norm and dip: the
-/// parameter mag_dist.current_tau_s): the field's heading is noisier than its norm and dip.
-inline constexpr double kHeadingDevTau_s = 0.5;
-
 struct MagDisturbanceCoeffs {
   LowpassCoeffs norm_dip_lp;
   double head_th2_rad2 = 0;                          ///< heading_th_deg squared, rad^2
