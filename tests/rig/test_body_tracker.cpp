@@ -99,8 +99,9 @@ TEST(BodyTracker, EachSegmentIsItsSensorsFilterThroughTheCalibration) {
 }
 
 // 6D: once a segment's alignment from motion is found, later evidence turns it no faster than
-// a 6D heading drifts (max_drift_deg_s), whatever the motion says, and evidence that would turn
-// it over (here the whole body turning rigidly tells the thigh's fit 176 deg) is refused and
+// a 6D heading drifts (max_drift_deg_s; a fit still settling may turn at settle_turn_deg_s,
+// which none here does after its first turn), whatever the motion says, and evidence that would
+// turn it over (here the whole body turning rigidly tells the thigh's fit 176 deg) is refused and
 // reported: no segment flips.
 TEST(BodyTracker, SixDAlignmentTurnsNoFasterThanTheDriftLimitAndNeverFlips) {
   const double max_deg_s = HeadingFromMotionOptions{}.max_drift_deg_s;

@@ -117,5 +117,60 @@ TEST(HeadingFromMotion, StaleReferenceSamplesAreNotPaired) {
   EXPECT_FALSE(h.estimate(kFoot, yaw));
 }
 
+// Sensors sample at their own instants: here the reference 5 ms after each segment sample. The
+// signal's direction turns at 4 rad/s, so pairing a segment sample with the newest reference
+// would read the yaw 1.1 deg off; paired with the segment's signal interpolated to the
+// reference's time, the yaw is exact.
+TEST(HeadingFromMotion, PairsEachReferenceSampleWithTheSegmentAtItsTime) {
+  HeadingFromMotion h;
+  h.reset(foot_follows_shank());
+  const double offset = 30 * kDeg;
+  const auto signal = [](double t_s) {
+    return Eigen::Vector3d(2 * std::cos(4 * t_s), 2 * std::sin(4 * t_s), 0);
+  };
+  for (int k = 0; k < 1000; ++k) {
+    const int64_t t = static_cast<int64_t>(k) * 10'000'000;
+    h.add(kFoot, yawed(signal(t * 1e-9), -offset), t);
+    h.add_reference(kFoot, signal((t + 5'000'000) * 1e-9), t + 5'000'000);
+  }
+  double yaw = 0;
+  ASSERT_TRUE(h.estimate(kFoot, yaw));
+  EXPECT_NEAR(yaw, offset, 0.02 * kDeg);
+}
+
+// A fit settles: while its evidence is young and agrees with itself it is settling (the caller
+// may turn a found alignment faster); with enough evidence, or with evidence that disagrees,
+// it is not.
+TEST(HeadingFromMotion, SettlesOnceItHasEnoughCoherentEvidence) {
+  HeadingFromMotionOptions o;
+  HeadingFromMotion h(o);
+  h.reset(foot_follows_shank());
+  EXPECT_FALSE(h.settling(kShank));  // not fitted
+  const Eigen::Vector3d v(1.0, 0.5, 0);
+  int k = 0;
+  const auto feed = [&](double seg_sign) {
+    const int64_t t = static_cast<int64_t>(k) * 10'000'000;
+    h.add_reference(kFoot, v * std::sin(k * 0.3), t);
+    h.add(kFoot, seg_sign * v * std::sin(k * 0.3), t);
+    ++k;
+  };
+  for (int i = 0; i < 20; ++i)
+    feed(1);
+  double yaw = 1;
+  ASSERT_TRUE(h.estimate(kFoot, yaw));  // found from 0.2 s of motion
+  EXPECT_TRUE(h.settling(kFoot));
+  // Evidence that contradicts it: the resultant shrinks, the fit is not settling on anything.
+  for (int i = 0; i < 20; ++i)
+    feed(-1);
+  EXPECT_FALSE(h.settling(kFoot));
+  // Seconds of agreeing motion: settled.
+  h.restart(kFoot, kShank);
+  for (int i = 0; i < 1000; ++i)
+    feed(1);
+  EXPECT_FALSE(h.settling(kFoot));
+  ASSERT_TRUE(h.estimate(kFoot, yaw));
+  EXPECT_NEAR(yaw, 0, 1e-9);
+}
+
 }  // namespace
 }  // namespace mocap::rig

@@ -158,6 +158,8 @@ class BodyTracker {
   /// acceleration of the joint-centre signal.
   std::vector<Eigen::Vector3d> prev_w_rad_s_;
   std::vector<int64_t> prev_w_t_ns_;
+  std::vector<Eigen::Vector3d> prev_acc_m_s2_;
+  std::vector<Eigen::Quaterniond> prev_q_;
   /// One signal's band-pass state (see feed_heading_from_motion).
   struct BandPass {
     Eigen::Vector3d slow = Eigen::Vector3d::Zero(), fast = Eigen::Vector3d::Zero();
