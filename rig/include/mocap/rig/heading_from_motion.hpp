@@ -10,9 +10,11 @@
 // filter commutes with the yaw; it removes each filter's slow gravity leak and the jitter above
 // a few Hz); the fit is a weighted circular mean of the angle between them, each instant's
 // weight saturating (a jump must not outvote seconds of walking), forgotten over tau_s so slow
-// heading drift is followed, and once found the caller turns it no faster than a 6D heading
-// drifts. A reference further up (a foot under an untracked shank) gives angular rates
-// instead: the horizontal rates of a foot and the thigh above follow each other, more loosely.
+// heading drift is followed, and once found (and settled: settle_evidence) the caller turns it
+// no faster than a 6D heading drifts. Each reference sample is paired with the segment's signal
+// at its time (sensors sample at their own instants). A reference further up (a foot under an
+// untracked shank) gives angular rates instead: the horizontal rates of a foot and the thigh above
+// follow each other, more loosely.
 #pragma once
 
 #include <Eigen/Core>
@@ -45,9 +47,9 @@ struct HeadingFromMotionOptions {
   /// degrees off, and at the drift limit it would take as many seconds to come back. Until the
   /// evidence reaches settle_evidence (about a second of saturated motion), and while the
   /// resultant keeps settle_coherence of it, the caller turns at settle_turn_deg_s. CMU 6D,
-  /// 24 clips x 3 seeds, worst segment excess 5.4 -> 2.4 deg (sites); evidence 0.3-3 and rate
-  /// 10-45 deg/s all within 0.05 deg of it; without the coherence test the hanging forearms of
-  /// an N-pose alone wander (forearm_l excess 2.4 -> 3.0 deg).
+  /// 24 clips x 3 seeds, worst segment excess on the sites 7.7 -> 2.5 deg (docs/accuracy.md);
+  /// evidence 0.3-3 and rate 10-45 deg/s give the same worst; without the coherence test the
+  /// hanging forearms of an N-pose alone wander (forearm_l excess 2.6 -> 3.0 deg).
   double settle_evidence = 1.0;
   double settle_coherence = 0.7;
   double settle_turn_deg_s = 20.0;
@@ -73,7 +75,6 @@ class HeadingFromMotion {
   /// The yaw (rad, about the vertical) that would align the segment's sensor, once there is
   /// enough evidence; false before.
   bool estimate(int segment, double& yaw_rad) const;
-  /// The evidence gathered for segment s (see min_evidence).
   /// Segment s's fit has less than settle_evidence, and what it has agrees with itself (the
   /// resultant is at least settle_coherence of the evidence).
   bool settling(int segment) const;
