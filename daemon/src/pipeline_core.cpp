@@ -75,7 +75,8 @@ bool PipelineCore::take(const ImuSample& s) {
   h.seq = s.seq;
   h.t_device_ns = s.t_device_ns;
   sample_since_frame_ = true;
-  newest_t_ns_ = std::max(newest_t_ns_, s.t_host_ns);
+  newest_t_ns_ = have_sample_ ? std::max(newest_t_ns_, s.t_host_ns) : s.t_host_ns;
+  have_sample_ = true;
   if (!h.live) {
     h.live = true;
     engine_.set_sensor_live(i, true);
@@ -144,8 +145,10 @@ void PipelineCore::publish_frame(int64_t t_now_ns) {
   // it is never held back until a newer sample comes (per-sample mode would otherwise skip its
   // frame). No sample since the last frame: no new pose, no frame, unless a frame flag or the
   // calibration state changed or the sensors fell silent for stale_after_ms: then a frame at
-  // the clock's time says so.
-  int64_t t_frame_ns = newest_t_ns_;
+  // the clock's time says so. Before any sample (a flag set at start-up) that is the clock's
+  // time too: a frame at 0 put a recording's first pose hours before its second (an imported
+  // take's keys beyond Blender's last frame once the host was up 12 h).
+  int64_t t_frame_ns = have_sample_ ? newest_t_ns_ : t_now_ns;
   if (published_t_ns_ != INT64_MIN && t_frame_ns <= published_t_ns_) {
     if (sample_since_frame_) {
       t_frame_ns = published_t_ns_ + 1;

@@ -129,6 +129,24 @@ TEST(PipelineCore, EveryFrameHasItsOwnTime) {
   EXPECT_GT(sink.frames.back().t_ns, sink.frames[before_flag - 1].t_ns);
 }
 
+// A frame before any sample (a flag set at start-up) is at the clock's time, not at 0: a
+// recording's first pose once sat hours before the next (the host's uptime), which put an
+// imported take's keys past Blender's last frame.
+TEST(PipelineCore, AFrameBeforeAnySampleHasTheClocksTime) {
+  TwoSensorCore pipe(100);
+  auto& [eng, core, sink] = pipe;
+  const int64_t t0 = 47'000'000'000'000LL;  // 13 h after boot
+  core.set_frame_flag(kFrameDemo, true);
+  core.advance_clock_to(t0);
+  core.advance_clock_to(t0 + 20'000'000);
+  ASSERT_FALSE(sink.frames.empty());
+  EXPECT_EQ(sink.frames.front().t_ns, t0 + 10'000'000);
+  core.process(sample(0, t0 + 25'000'000));
+  core.advance_clock_to(t0 + 30'000'000);
+  ASSERT_GE(sink.frames.size(), 2u);
+  EXPECT_EQ(sink.frames.back().t_ns, t0 + 25'000'000);  // then the sample's
+}
+
 // Per-sample mode: the frame published after a sample shows that sample (its number, device
 // time and turn of its segment), also when the sample is older than the last frame (each
 // sensor's clock maps its samples with a delay of its own, so one can come "late"): such a

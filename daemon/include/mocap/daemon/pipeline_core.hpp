@@ -109,6 +109,7 @@ class PipelineCore {
   PoseFrame frame_;
   uint64_t frame_no_ = 0, samples_ = 0, rejected_ = 0;
   int64_t newest_t_ns_ = 0;
+  bool have_sample_ = false;            ///< newest_t_ns_ is a sample's time
   int64_t published_t_ns_ = INT64_MIN;  ///< time of the last frame published
   int64_t unix_offset_ns_ = 0;
   bool unix_offset_known_ = false;
