@@ -13,7 +13,7 @@ void HeadingFromMotion::reset(const std::array<int, kSegmentCount>& reference) {
     have_[s] = false;
     have_prev_[s] = false;
     have_pair_[s] = false;
-    have_ref_[s] = false;
+    ref_pending_[s] = false;
     sum_[s].setZero();
     evidence_[s] = 0;
     active_ = active_ || ref_[s] >= 0;
@@ -27,7 +27,7 @@ void HeadingFromMotion::restart(int seg, int reference) {
   have_[seg] = false;
   have_prev_[seg] = false;
   have_pair_[seg] = false;
-  have_ref_[seg] = false;
+  ref_pending_[seg] = false;
   sum_[seg].setZero();
   evidence_[seg] = 0;
 }
@@ -36,7 +36,7 @@ void HeadingFromMotion::add_reference(int seg, const Eigen::Vector3d& v, int64_t
   if (seg < 0 || seg >= kSegmentCount || ref_[seg] < 0 || !v.allFinite()) return;
   ref_v_[seg] = v.head<2>();
   ref_t_ns_[seg] = t_ns;
-  have_ref_[seg] = true;
+  ref_pending_[seg] = true;
   pair(seg);
 }
 
@@ -55,9 +55,9 @@ void HeadingFromMotion::pair(int seg) {
   // Each reference sample is paired once, with the segment's signal at its time: interpolated
   // between the segment's two samples around it (sensors sample at their own instants; pairing
   // with the newest one instead turns the fit by the angle the acceleration turns meanwhile),
-  // or the segment's nearest sample within max_pair_age_s.
-  if (!have_ref_[seg] || !have_[seg] || t_ns_[seg] < ref_t_ns_[seg]) return;  // wait for it
-  have_ref_[seg] = false;
+  // or the segment's newer sample within max_pair_age_s.
+  if (!ref_pending_[seg] || !have_[seg] || t_ns_[seg] < ref_t_ns_[seg]) return;  // wait for it
+  ref_pending_[seg] = false;
   const int64_t t = ref_t_ns_[seg];
   const int64_t max_age_ns = static_cast<int64_t>(opt_.max_pair_age_s * 1e9);
   Eigen::Vector2d a = v_[seg];

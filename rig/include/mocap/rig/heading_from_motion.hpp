@@ -98,7 +98,7 @@ class HeadingFromMotion {
   std::array<int, kSegmentCount> ref_{};
   std::array<Eigen::Vector2d, kSegmentCount> ref_v_{};
   std::array<int64_t, kSegmentCount> ref_t_ns_{};
-  std::array<bool, kSegmentCount> have_ref_{};
+  std::array<bool, kSegmentCount> ref_pending_{};  ///< the newest reference sample awaits its pair
   /// The segment's two newest signals (the reference's is interpolated between them).
   std::array<Eigen::Vector2d, kSegmentCount> v_{};
   std::array<Eigen::Vector2d, kSegmentCount> prev_v_{};
