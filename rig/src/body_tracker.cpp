@@ -60,10 +60,7 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
       q_source_(sensors_.size(), Eigen::Quaterniond::Identity()),
       field_watch_(sensors_.size()),
       prev_t_ns_(sensors_.size(), 0),
-      prev_w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
-      prev_w_t_ns_(sensors_.size(), 0),
-      prev_acc_m_s2_(sensors_.size(), Eigen::Vector3d::Zero()),
-      prev_q_(sensors_.size(), Eigen::Quaterniond::Identity()),
+      prev_motion_(sensors_.size()),
       hinges_{{{index(Segment::thigh_l), index(Segment::shank_l), HingeAxisEstimator(1)},
                {index(Segment::thigh_r), index(Segment::shank_r), HingeAxisEstimator(1)}}},
       w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
@@ -317,22 +314,20 @@ void BodyTracker::feed_heading_from_motion(int i, const ImuSample& s, const Eige
   const int seg = sensors_[k].segment;
   const Calibration& c = align_.calibration();
   const Eigen::Vector3d w = s.gyr_rad_s - gyro_bias_rad_s;
-  const double dt_s = static_cast<double>(s.t_host_ns - prev_w_t_ns_[k]) * 1e-9;
-  const bool have_dw = prev_w_t_ns_[k] != 0 && dt_s > 0 && dt_s < 0.05;
-  const Eigen::Vector3d dw =
-      have_dw ? Eigen::Vector3d((w - prev_w_rad_s_[k]) / dt_s) : Eigen::Vector3d::Zero();
+  PrevMotion& prev = prev_motion_[k];
+  const double dt_s = static_cast<double>(s.t_host_ns - prev.t_ns) * 1e-9;
+  const bool have_dw = prev.t_ns != 0 && dt_s > 0 && dt_s < 0.05;
+  const PrevMotion before = prev;
+  prev = {w, s.acc_m_s2, q, s.t_host_ns};
+  if (!have_dw) return;
   // The rotation terms use the rate's difference, which belongs between the two samples: every
   // term is taken there (mean rate, mean specific force, halfway orientation). Taken at the
   // newer sample they lag the angular acceleration by half a sample, and the fit turns with the
   // motion (CMU 6D: left foot mean excess 0.80 -> 0.16 deg).
-  const Eigen::Vector3d w_mid = 0.5 * (w + prev_w_rad_s_[k]);
-  const Eigen::Vector3d acc_mid_m_s2 = 0.5 * (s.acc_m_s2 + prev_acc_m_s2_[k]);
-  const Eigen::Quaterniond q_mid = prev_q_[k].slerp(0.5, q);
-  prev_w_rad_s_[k] = w;
-  prev_w_t_ns_[k] = s.t_host_ns;
-  prev_acc_m_s2_[k] = s.acc_m_s2;
-  prev_q_[k] = q;
-  if (!have_dw) return;
+  const Eigen::Vector3d dw = (w - before.w_rad_s) / dt_s;
+  const Eigen::Vector3d w_mid = 0.5 * (w + before.w_rad_s);
+  const Eigen::Vector3d acc_mid_m_s2 = 0.5 * (s.acc_m_s2 + before.acc_m_s2);
+  const Eigen::Quaterniond q_mid = before.q.slerp(0.5, q);
   const Eigen::Quaterniond q_aligned = c.q_correction[seg] * q_mid;
   // Acceleration (gravity removed, aligned earth frame) of the point r_seg of the segment's
   // frame from its sensor: the sensor's specific force plus the rotation terms.

@@ -154,12 +154,15 @@ class BodyTracker {
   /// Per segment: its sensor's filter has a heading frame of its own (6D, or no magnetometer).
   std::array<bool, kSegmentCount> own_heading_frames() const;
   int64_t heading_applied_t_ns_ = 0;
-  /// Per sensor: the previous bias-free rate (sensor frame) and its time, for the angular
-  /// acceleration of the joint-centre signal.
-  std::vector<Eigen::Vector3d> prev_w_rad_s_;
-  std::vector<int64_t> prev_w_t_ns_;
-  std::vector<Eigen::Vector3d> prev_acc_m_s2_;
-  std::vector<Eigen::Quaterniond> prev_q_;
+  /// Per sensor: its previous sample as the joint-centre signal uses it (the angular
+  /// acceleration between the two, every term taken halfway).
+  struct PrevMotion {
+    Eigen::Vector3d w_rad_s = Eigen::Vector3d::Zero();  ///< bias-free rate, sensor frame
+    Eigen::Vector3d acc_m_s2 = Eigen::Vector3d::Zero();
+    Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  ///< the filter's orientation
+    int64_t t_ns = 0;                                       ///< 0: none yet
+  };
+  std::vector<PrevMotion> prev_motion_;
   /// One signal's band-pass state (see feed_heading_from_motion).
   struct BandPass {
     Eigen::Vector3d slow = Eigen::Vector3d::Zero(), fast = Eigen::Vector3d::Zero();
