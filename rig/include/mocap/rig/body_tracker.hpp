@@ -14,7 +14,8 @@
 //      reference of the fits below it. Not the elbows: a forearm sensor turns with pronation
 //      (the forearm segment carries it, skeleton.md), so its axis is not fixed in that sensor's
 //      frame; fitted as a hinge it turned the arms 30-140 deg off in 6D after an N-pose alone
-//      (24 CMU clips, mean 12.9 deg against 4.4 without),
+//      (24 CMU clips, mean 12.9 deg against 4.4 without); in 6D each knee's two segments'
+//      relative heading is then held to its hinge (hinge_heading.hpp), each turning half way,
 //   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
 //      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted,
 //   7. the skeleton's input (orientation and flags);
@@ -38,6 +39,7 @@
 #include "mocap/rig/calibrate.hpp"
 #include "mocap/rig/heading_from_motion.hpp"
 #include "mocap/rig/hinge_axis.hpp"
+#include "mocap/rig/hinge_heading.hpp"
 #include "mocap/rig/local_field_watch.hpp"
 #include "mocap/rig/mounting_motion.hpp"
 #include "mocap/rig/pose_capture.hpp"
@@ -211,7 +213,12 @@ class BodyTracker {
   struct Hinge {
     int upper, lower;
     HingeAxisEstimator axis;
+    HingeHeading heading;
+    int64_t heading_applied_t_ns = 0;
   };
+  /// 6D: the hinge's relative heading held to its axis (hinge_heading.hpp), from a sample of
+  /// its lower segment's sensor (orientation q, dt_s since its previous sample).
+  void hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s, int64_t t_ns);
   std::array<Hinge, 2> hinges_;
   std::vector<Eigen::Vector3d> w_rad_s_;  ///< per sensor: its newest bias-free rate
   void apply_heading_from_motion(int64_t t_ns);

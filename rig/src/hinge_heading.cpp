@@ -1,0 +1,44 @@
+// HingeHeading: a knee's relative heading held to its hinge (see hinge_heading.hpp).
+#include "mocap/rig/hinge_heading.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "mocap/core/units.hpp"
+
+namespace mocap::rig {
+
+void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, double dt_s) {
+  if (!(dt_s > 0) || dt_s > 0.1) return;
+  if (!y1.allFinite() || !y2.allFinite()) return;
+  const double h1 = std::hypot(y1.x(), y1.y()), h2 = std::hypot(y2.x(), y2.y());
+  const double weight = std::min(h1, h2) * std::min(h1, h2);
+  if (weight < 1e-3) return;
+  // The yaw taking the lower axis' horizontal direction onto the upper's.
+  const double error_rad =
+      std::atan2(y2.x() * y1.y() - y2.y() * y1.x(), y2.x() * y1.x() + y2.y() * y1.y());
+  if (std::abs(error_rad) > opt_.max_error_deg * kRadPerDeg) {
+    ++refused_;
+    return;
+  }
+  pending_rad_ += weight * error_rad * std::min(dt_s / opt_.tau_s, 1.0);
+}
+
+double HingeHeading::take() {
+  const double yaw = pending_rad_;
+  pending_rad_ = 0;
+  return yaw;
+}
+
+int HingeHeading::take_refused() {
+  const int n = refused_;
+  refused_ = 0;
+  return n;
+}
+
+void HingeHeading::reset() {
+  pending_rad_ = 0;
+  refused_ = 0;
+}
+
+}  // namespace mocap::rig

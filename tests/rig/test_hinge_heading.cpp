@@ -1,0 +1,74 @@
+// A knee's relative heading held to its hinge (rig/hinge_heading.hpp): the lower segment's
+// axis, seen in a frame that drifts against the upper's, is turned back onto the upper's axis
+// within the correction's time constant; an error no drift can make is refused and counted; a
+// vertical axis says nothing about heading.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "mocap/core/units.hpp"
+#include "mocap/rig/hinge_heading.hpp"
+
+namespace mocap::rig {
+namespace {
+
+Eigen::Vector3d turned_by_yaw(const Eigen::Vector3d& v, double yaw_rad) {
+  return Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) * v;
+}
+
+/// Runs the hold at 100 Hz for `seconds`: the body turns, the hinge's axis tilts a little, the
+/// lower frame is off by offset0_rad and drifts at drift_rad_s; each 0.1 s the correction is
+/// applied. Returns the lower frame's error left at the end, rad.
+double run(HingeHeading& hold, double seconds, double offset0_rad, double drift_rad_s) {
+  constexpr double dt = 0.01;
+  double applied_rad = 0;
+  double error_rad = offset0_rad;
+  for (int n = 1; n <= static_cast<int>(seconds / dt); ++n) {
+    const double t = n * dt;
+    const Eigen::Vector3d axis =
+        turned_by_yaw(Eigen::Vector3d(0, std::cos(0.2 * std::sin(t)), 0.2 * std::sin(t)),
+                      0.8 * std::sin(0.1 * t));
+    error_rad = offset0_rad + drift_rad_s * t - applied_rad;
+    hold.add(axis, turned_by_yaw(axis, error_rad), dt);
+    if (n % 10 == 0) applied_rad -= hold.take();
+  }
+  return error_rad;
+}
+
+TEST(HingeHeading, TurnsAnOffsetBackAndFollowsADrift) {
+  HingeHeadingOptions o;
+  o.tau_s = 2.0;
+  // A 20 deg offset: after five time constants under 2 % of it is left (e^-5 is 0.7 %; the
+  // axis' tilt weighs a little less than one).
+  HingeHeading a(o);
+  EXPECT_LT(std::abs(run(a, 5 * o.tau_s, 20 * kRadPerDeg, 0)), 0.02 * 20 * kRadPerDeg);
+  // A drift of 1 deg/s is followed with the lag of a first-order loop (rate x tau = 2 deg),
+  // not left to grow (60 deg in the minute).
+  HingeHeading b(o);
+  const double lag_rad = run(b, 60, 0, 1 * kRadPerDeg);
+  EXPECT_GT(lag_rad, 1.5 * kRadPerDeg);
+  EXPECT_LT(lag_rad, 2.5 * kRadPerDeg);
+  EXPECT_EQ(b.take_refused(), 0);
+}
+
+TEST(HingeHeading, RefusesAnErrorNoDriftMakes) {
+  HingeHeading hold;
+  for (int n = 0; n < 100; ++n)
+    hold.add(Eigen::Vector3d::UnitY(), turned_by_yaw(Eigen::Vector3d::UnitY(), 90 * kRadPerDeg),
+             0.01);
+  EXPECT_EQ(hold.take(), 0.0);
+  EXPECT_EQ(hold.take_refused(), 100);
+  EXPECT_EQ(hold.take_refused(), 0);
+}
+
+TEST(HingeHeading, AVerticalAxisSaysNothing) {
+  HingeHeading hold;
+  const Eigen::Vector3d up(0.001, 0, 1);
+  for (int n = 0; n < 100; ++n)
+    hold.add(up.normalized(), turned_by_yaw(up, 30 * kRadPerDeg).normalized(), 0.01);
+  EXPECT_EQ(hold.take(), 0.0);
+}
+
+}  // namespace
+}  // namespace mocap::rig
