@@ -250,8 +250,10 @@ void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, doub
   // axes found within kHingeAgreeDeg): held to a hinge its segments' axes do not lie on, the
   // knee would turn away from it.
   const double cos_agree = std::cos(kHingeAgreeDeg * kRadPerDeg);
-  if ((c.q_sensor_segment[h.upper] * Eigen::Vector3d::UnitY()).dot(h.axis.axis1()) < cos_agree ||
-      (c.q_sensor_segment[h.lower] * Eigen::Vector3d::UnitY()).dot(h.axis.axis2()) < cos_agree)
+  if (std::abs((c.q_sensor_segment[h.upper] * Eigen::Vector3d::UnitY()).dot(h.axis.axis1())) <
+          cos_agree ||
+      std::abs((c.q_sensor_segment[h.lower] * Eigen::Vector3d::UnitY()).dot(h.axis.axis2())) <
+          cos_agree)
     return;
   const int up = skeleton_.rig().sensor_for_segment[h.upper];
   h.heading.add(c.segment_from_sensor(h.upper, q_earth_sensor(up)) * Eigen::Vector3d::UnitY(),

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "mocap/core/units.hpp"
+#include "mocap/skeleton/quat_math.hpp"
 
 namespace mocap::rig {
 namespace {
@@ -19,6 +20,8 @@ constexpr double kCorrelationS = 0.5;
 // One axis flipped alone must fit this many times worse than the fit for the fit to fix the
 // axes' relative sign.
 constexpr double kRelativeSignRatio = 4.0;
+/// Axes that moved this far since the last solve: the relative heading is read afresh.
+const double kAfreshCos = std::cos(30 * kRadPerDeg);
 
 /// Smallest curvature of j^T s j across the unit vector j (the flattest way to turn it).
 double least_curvature(const Eigen::Matrix3d& s, const Eigen::Vector3d& j) {
@@ -42,6 +45,10 @@ void HingeAxisEstimator::reset(int64_t t_ns) {
   i1_.setZero();
   i2_.setZero();
   normal_.setZero();
+  normal_h_.setZero();
+  heading_.reset();
+  d_rad_ = 0;
+  d_known_ = false;
   sum_.setZero();
   weight_ = 0;
   known_ = updated_ = false;
@@ -59,6 +66,19 @@ void HingeAxisEstimator::add(const Eigen::Quaterniond& q1, const Eigen::Quaterni
   t_prev_ns_ = t_ns;
   i1_ += w1 * dt_s;
   i2_ += w2 * dt_s;
+  // The two frames' relative heading, followed with the axes found (read afresh from a
+  // sample when there is none yet).
+  if (known_) {
+    const Eigen::Vector3d e1 = q1 * j1_, e2 = q2 * j2_;
+    if (!d_known_) {
+      // From a sample where both axes lie near the horizontal (else their heading is noise).
+      d_known_ = std::hypot(e1.x(), e1.y()) > 0.7 && std::hypot(e2.x(), e2.y()) > 0.7;
+      d_rad_ = std::atan2(e2.x() * e1.y() - e2.y() * e1.x(), e2.x() * e1.x() + e2.y() * e1.y());
+    } else {
+      heading_.add(e1, yaw_rotation(d_rad_) * e2, dt_s);
+      d_rad_ = wrap_angle_rad(d_rad_ + heading_.take());
+    }
+  }
   const double since_s = static_cast<double>(t_ns - t_entry_ns_) * 1e-9;
   if (since_s < kSampleEveryS) return;
   t_entry_ns_ = t_ns;
@@ -70,6 +90,17 @@ void HingeAxisEstimator::add(const Eigen::Quaterniond& q1, const Eigen::Quaterni
   normal_ = keep * normal_ + v * v.transpose();
   sum_ = keep * sum_ + v;
   weight_ = keep * weight_ + 1;
+  // The horizontal rows, x and y of q1 j1 - Rz(d) q2 j2, once the relative heading is followed.
+  normal_h_ *= keep;
+  if (d_known_ && relative_sign_known_) {
+    const Eigen::Matrix3d r1 = q1.normalized().toRotationMatrix(),
+                          r2 = (yaw_rotation(d_rad_) * q2.normalized()).toRotationMatrix();
+    for (int k = 0; k < 2; ++k) {
+      Eigen::Matrix<double, 6, 1> row;
+      row << r1.row(k).transpose(), -r2.row(k).transpose();
+      normal_h_ += row * row.transpose();
+    }
+  }
   // The joint angle's integrals while either segment turns (for the signs).
   if (w1.norm() > 0.3 || w2.norm() > 0.3) {
     ring_[static_cast<size_t>(head_)] = Entry{i1_, i2_};
@@ -95,7 +126,8 @@ void HingeAxisEstimator::solve() {
   if (cov.block<3, 3>(0, 0).trace() < kMinEvidence * 0.5 ||
       cov.block<3, 3>(3, 3).trace() < kMinEvidence * 0.5)
     return;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(normal_);
+  const Eigen::Matrix<double, 6, 6> whole = normal_ + normal_h_;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(whole);
   const Eigen::Matrix<double, 6, 1> x = es.eigenvectors().col(0);
   const double n1 = x.head<3>().norm(), n2 = x.tail<3>().norm();
   if (n1 < 0.3 || n2 < 0.3) return;  // one segment alone explains it: not a hinge's axis
@@ -103,22 +135,37 @@ void HingeAxisEstimator::solve() {
   // Residual per sample and the flattest curvature across each axis.
   Eigen::Matrix<double, 6, 1> xs;
   xs << j1, j2;
-  const double residual2 = std::max(xs.dot(normal_ * xs), 0.0) / weight_;
-  const double k1 = least_curvature(normal_.block<3, 3>(0, 0) / weight_, j1);
-  const double k2 = least_curvature(normal_.block<3, 3>(3, 3) / weight_, j2);
+  const double residual2 = std::max(xs.dot(whole * xs), 0.0) / weight_;
+  const double k1 = least_curvature(whole.block<3, 3>(0, 0) / weight_, j1);
+  const double k2 = least_curvature(whole.block<3, 3>(3, 3) / weight_, j2);
   // Samples a correlation time apart count as independent.
   const double independent = std::max(1.0, weight_ * kSampleEveryS / kCorrelationS);
   const double var = residual2 + kResidualFloor * kResidualFloor;
   sigma_deg_ = std::min(
       180.0, std::sqrt(var / (std::max(std::min(k1, k2), 1e-12) * independent)) * kDegPerRad);
+  const Eigen::Vector3d prev1 = j1_, prev2 = j2_;
   j1_ = j1;
   j2_ = j2;
   // The fit fixes the axes' relative sign where the axis' elevation varied: one axis flipped
   // alone then fits clearly worse. Where it stayed level it fits as well, and only the
   // flexing side can tell.
   xs.head<3>() = -j1;
+  // From the elevation rows alone: the horizontal rows were taken with a relative heading that
+  // holds for the axes' relative sign at the time, so they would keep a wrong one.
   const double flipped2 = std::max(xs.dot(normal_ * xs), 0.0) / weight_;
-  choose_signs(flipped2 > kRelativeSignRatio * var);
+  xs.head<3>() = j1;
+  const double elevation2 = std::max(xs.dot(normal_ * xs), 0.0) / weight_;
+  constexpr double kFloor2 = kResidualFloor * kResidualFloor;
+  if (elevation2 > kRelativeSignRatio * (flipped2 + kFloor2)) j2_ = -j2_;  // the rows' sign lost
+  relative_sign_known_ = std::max(flipped2, elevation2) >
+                         kRelativeSignRatio * (std::min(flipped2, elevation2) + kFloor2);
+  choose_signs(relative_sign_known_);
+  // Axes that moved far (30 deg; a sign chosen the other way): the relative heading is read
+  // afresh from the next sample, and the rows taken with the old one are dropped.
+  if (known_ && (j1_.dot(prev1) < kAfreshCos || j2_.dot(prev2) < kAfreshCos)) {
+    d_known_ = false;
+    normal_h_.setZero();
+  }
   known_ = updated_ = true;
 }
 
