@@ -17,6 +17,11 @@
 namespace mocap::rig {
 namespace {
 
+/// A knee's heading is held to its hinge only where its segments' mountings put their left
+/// axes within 10 deg of the hinge's axes found: held to a hinge its segments' axes do not lie
+/// on, the knee would turn away from it.
+const double kCosHingeAgree = std::cos(10.0 * kRadPerDeg);
+
 /// The configured setup with each sensor's site normal filled in (its own, or its segment's
 /// standard site; none for a sensor strapped anyhow).
 CalibrationSetup calibration_setup(const std::vector<TrackerSensor>& sensors,
@@ -207,9 +212,12 @@ void BodyTracker::finish_calibration() {
   start_heading_from_motion();
   if (mounting_motion_next_ && captured.capture.pose == CalibrationPose::npose)
     mounting_.start(captured.capture, captured.capture.t_end_ns, opt_.mounting_motion_s);
-  // The hinges are straight in the pose: their angles count from here.
-  for (Hinge& h : hinges_)
+  // The hinges are straight in the pose: their angles count from here; the holds start over.
+  for (Hinge& h : hinges_) {
     h.axis.reset(captured.capture.pose == CalibrationPose::npose ? captured.capture.t_end_ns : 0);
+    h.heading.reset();
+    h.heading_applied_t_ns = 0;
+  }
 }
 
 void BodyTracker::apply_hinge_axes(Hinge& h) {
@@ -242,18 +250,14 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
 void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s,
                                      int64_t t_ns) {
   constexpr int64_t kEveryNs = 100'000'000;  // 10 Hz, as the other heading alignments
-  constexpr double kHingeAgreeDeg = 10.0;
   const SegmentAlignment &au = align_.segment(h.upper), &al = align_.segment(h.lower);
   if (!au.aligned || !al.aligned || !au.own_frame || !al.own_frame || !h.axis.known()) return;
   const Calibration& c = align_.calibration();
-  // Only where the segments' left axes are the hinge's axes (their mountings agree with the
-  // axes found within kHingeAgreeDeg): held to a hinge its segments' axes do not lie on, the
-  // knee would turn away from it.
-  const double cos_agree = std::cos(kHingeAgreeDeg * kRadPerDeg);
+  // Only where the segments' left axes are the hinge's axes (kCosHingeAgree).
   if (std::abs((c.q_sensor_segment[h.upper] * Eigen::Vector3d::UnitY()).dot(h.axis.axis1())) <
-          cos_agree ||
+          kCosHingeAgree ||
       std::abs((c.q_sensor_segment[h.lower] * Eigen::Vector3d::UnitY()).dot(h.axis.axis2())) <
-          cos_agree)
+          kCosHingeAgree)
     return;
   const int up = skeleton_.rig().sensor_for_segment[h.upper];
   h.heading.add(c.segment_from_sensor(h.upper, q_earth_sensor(up)) * Eigen::Vector3d::UnitY(),

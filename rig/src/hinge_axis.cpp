@@ -49,6 +49,7 @@ void HingeAxisEstimator::reset(int64_t t_ns) {
   heading_.reset();
   d_rad_ = 0;
   d_known_ = false;
+  relative_sign_known_ = false;
   sum_.setZero();
   weight_ = 0;
   known_ = updated_ = false;
@@ -73,7 +74,7 @@ void HingeAxisEstimator::add(const Eigen::Quaterniond& q1, const Eigen::Quaterni
     if (!d_known_) {
       // From a sample where both axes lie near the horizontal (else their heading is noise).
       d_known_ = std::hypot(e1.x(), e1.y()) > 0.7 && std::hypot(e2.x(), e2.y()) > 0.7;
-      d_rad_ = std::atan2(e2.x() * e1.y() - e2.y() * e1.x(), e2.x() * e1.x() + e2.y() * e1.y());
+      d_rad_ = yaw_between_rad(e2, e1);
     } else {
       heading_.add(e1, yaw_rotation(d_rad_) * e2, dt_s);
       d_rad_ = wrap_angle_rad(d_rad_ + heading_.take());

@@ -5,8 +5,13 @@
 #include <cmath>
 
 #include "mocap/core/units.hpp"
+#include "mocap/skeleton/quat_math.hpp"
 
 namespace mocap::rig {
+
+double yaw_between_rad(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+  return wrap_angle_rad(heading_of_rad(to) - heading_of_rad(from));
+}
 
 void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, double dt_s) {
   if (!(dt_s > 0) || dt_s > 0.1) return;
@@ -14,9 +19,7 @@ void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, dou
   const double h1 = std::hypot(y1.x(), y1.y()), h2 = std::hypot(y2.x(), y2.y());
   const double weight = std::min(h1, h2) * std::min(h1, h2);
   if (weight < 1e-3) return;
-  // The yaw taking the lower axis' horizontal direction onto the upper's.
-  const double error_rad =
-      std::atan2(y2.x() * y1.y() - y2.y() * y1.x(), y2.x() * y1.x() + y2.y() * y1.y());
+  const double error_rad = yaw_between_rad(y2, y1);
   if (std::abs(error_rad) > opt_.max_error_deg * kRadPerDeg) {
     ++refused_;
     return;

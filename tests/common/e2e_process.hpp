@@ -14,6 +14,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -70,7 +71,10 @@ inline int run_program(const std::vector<std::string>& argv, const std::string& 
 }
 
 /// Reads up to `count` JSON lines from the pose stream at 127.0.0.1:port (10 s at most).
-inline std::vector<nlohmann::json> read_json_lines(uint16_t port, int count) {
+/// Connects to a JSON-lines output and reads `count` lines (10 s at most); on_first, if given,
+/// is called once the first line has arrived (a test can start a motion at a known frame).
+inline std::vector<nlohmann::json> read_json_lines(uint16_t port, int count,
+                                                   const std::function<void()>& on_first = {}) {
   std::vector<nlohmann::json> out;
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
   sockaddr_in a{};
@@ -94,6 +98,7 @@ inline std::vector<nlohmann::json> read_json_lines(uint16_t port, int count) {
     while ((nl = buf.find('\n')) != std::string::npos && static_cast<int>(out.size()) < count) {
       out.push_back(nlohmann::json::parse(buf.substr(0, nl)));
       buf.erase(0, nl + 1);
+      if (out.size() == 1 && on_first) on_first();
     }
   }
   close(fd);

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -314,7 +315,12 @@ TEST(MocapSetup, AssignsEverySensorByMotionAndMocapdRunsTheRig) {
   for (const auto& group : groups) {
     while (!performer.resting())
       std::this_thread::sleep_for(10ms);
-    std::thread mover([&] {
+    // The motion starts once the first frame (the rest pose every turn is measured from) has
+    // arrived: a reader late under load would otherwise take its first frame mid-swing and see
+    // up to twice the amplitude.
+    std::promise<void> first_frame;
+    std::thread mover([&, first = first_frame.get_future()]() mutable {
+      first.wait_for(10s);
       std::this_thread::sleep_for(100ms);
       for (std::size_t g = 0; g < group.size(); ++g)
         performer.move(index(group[g]), amplitude_deg[g] * M_PI / 180, 2.0);
@@ -323,7 +329,8 @@ TEST(MocapSetup, AssignsEverySensorByMotionAndMocapdRunsTheRig) {
         std::this_thread::sleep_for(10ms);
       std::this_thread::sleep_for(100ms);
     });
-    const auto frames = test::read_json_lines(static_cast<uint16_t>(json_port), 100);
+    const auto frames = test::read_json_lines(static_cast<uint16_t>(json_port), 100,
+                                              [&] { first_frame.set_value(); });
     mover.join();
     ASSERT_GE(frames.size(), 80u);
     std::array<double, kSegmentCount> turned{};
