@@ -21,10 +21,6 @@ bool is_left_arm(int s) {
   return s == index(Segment::upper_arm_l) || s == index(Segment::forearm_l) ||
          s == index(Segment::hand_l);
 }
-
-Eigen::Quaterniond to_quat(const Eigen::Vector4d& xyzw) {
-  return Eigen::Quaterniond(xyzw[3], xyzw[0], xyzw[1], xyzw[2]).normalized();
-}
 }  // namespace
 
 std::string_view to_string(CalibrationPose p) {

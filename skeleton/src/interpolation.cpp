@@ -87,13 +87,10 @@ int OrientationTrack::key_before(int64_t t_ns) const {
 }
 
 bool OrientationTrack::bridged(int64_t t_ns, Eigen::Quaterniond& q) const {
-  if (count_ == 0 || t_ns <= t_at(0) || t_ns >= t_at(count_ - 1) || t_ns >= t_after_gap_ns_)
-    return false;
-  const int lo = key_before(t_ns), hi = lo + 1;
-  const int64_t gap = t_at(hi) - t_at(lo);
-  if (t_at(lo) == t_ns || gap > max_bridge_ns_ || gap <= nominal_gap_ns_) return false;
-  q = slerp_shortest(q_at(lo), q_at(hi),
-                     static_cast<double>(t_ns - t_at(lo)) / static_cast<double>(gap));
+  if (t_ns >= t_after_gap_ns_) return false;  // the frames of a stream without dropouts
+  const Sample s = sample(t_ns);
+  if (!s.bridged) return false;
+  q = s.q;
   return true;
 }
 

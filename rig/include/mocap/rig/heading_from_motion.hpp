@@ -85,34 +85,35 @@ class HeadingFromMotion {
   void restart(int segment, int reference);
   /// Segment s is no longer fitted (another source holds its heading).
   void stop(int segment) {
-    if (segment >= 0 && segment < kSegmentCount) ref_[segment] = -1;
+    if (segment >= 0 && segment < kSegmentCount) fit_[segment].ref = -1;
   }
   bool active() const { return active_; }
-  int reference(int segment) const { return ref_[segment]; }
+  int reference(int segment) const { return fit_[segment].ref; }
 
  private:
-  void pair(int segment);
+  /// One segment's fit against its reference.
+  struct Fit {
+    int ref = -1;  ///< the reference segment, -1: not fitted
+    /// The reference's newest signal (horizontal), awaiting its pair while ref_pending.
+    Eigen::Vector2d ref_v = Eigen::Vector2d::Zero();
+    int64_t ref_t_ns = 0;
+    bool ref_pending = false;
+    /// The segment's two newest signals (the reference's is interpolated between them).
+    Eigen::Vector2d v = Eigen::Vector2d::Zero(), prev_v = Eigen::Vector2d::Zero();
+    int64_t t_ns = 0, prev_t_ns = 0;
+    bool have = false, have_prev = false;
+    /// Time of the last paired reference sample (the weight's dt).
+    int64_t pair_t_ns = 0;
+    bool have_pair = false;
+    /// Weighted sum of |a||b| (cos, sin) of the angle from the signal to the reference's.
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    double evidence = 0;
+  };
+  void pair(Fit& f);
 
   HeadingFromMotionOptions opt_;
   bool active_ = false;
-  std::array<int, kSegmentCount> ref_{};
-  std::array<Eigen::Vector2d, kSegmentCount> ref_v_{};
-  std::array<int64_t, kSegmentCount> ref_t_ns_{};
-  std::array<bool, kSegmentCount> ref_pending_{};  ///< the newest reference sample awaits its pair
-  /// The segment's two newest signals (the reference's is interpolated between them).
-  std::array<Eigen::Vector2d, kSegmentCount> v_{};
-  std::array<Eigen::Vector2d, kSegmentCount> prev_v_{};
-  std::array<int64_t, kSegmentCount> t_ns_{};
-  std::array<int64_t, kSegmentCount> prev_t_ns_{};
-  std::array<bool, kSegmentCount> have_{};
-  std::array<bool, kSegmentCount> have_prev_{};
-  /// Time of the last paired reference sample (the weight's dt).
-  std::array<int64_t, kSegmentCount> pair_t_ns_{};
-  std::array<bool, kSegmentCount> have_pair_{};
-  /// Per fitted segment: weighted sum of |a||b| (cos, sin) of the angle from its signal to the
-  /// reference's.
-  std::array<Eigen::Vector2d, kSegmentCount> sum_{};
-  std::array<double, kSegmentCount> evidence_{};
+  std::array<Fit, kSegmentCount> fit_{};
 };
 
 }  // namespace mocap::rig

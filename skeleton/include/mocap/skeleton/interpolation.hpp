@@ -36,7 +36,8 @@ class OrientationTrack {
   bool push(int64_t t_ns, const Eigen::Quaterniond& q);
   Sample sample(int64_t t_ns) const;
   /// What sample() gives when it is bridged: true and q the slerp across the gap; false (q
-  /// untouched) otherwise, without interpolating (the dropout bridge asks every frame).
+  /// untouched) otherwise, at once for times after the newest gap (the dropout bridge asks
+  /// every frame).
   bool bridged(int64_t t_ns, Eigen::Quaterniond& q) const;
   int size() const { return count_; }
   void clear() {
