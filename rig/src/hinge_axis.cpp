@@ -20,8 +20,6 @@ constexpr double kCorrelationS = 0.5;
 // One axis flipped alone must fit this many times worse than the fit for the fit to fix the
 // axes' relative sign.
 constexpr double kRelativeSignRatio = 4.0;
-/// Axes that moved this far since the last solve: the relative heading is read afresh.
-const double kAfreshCos = std::cos(30 * kRadPerDeg);
 
 /// Smallest curvature of j^T s j across the unit vector j (the flattest way to turn it).
 double least_curvature(const Eigen::Matrix3d& s, const Eigen::Vector3d& j) {
@@ -37,18 +35,20 @@ double least_curvature(const Eigen::Matrix3d& s, const Eigen::Vector3d& j) {
 }  // namespace
 
 HingeAxisEstimator::HingeAxisEstimator(int flex_sign, int capacity)
-    : flex_sign_(flex_sign >= 0 ? 1 : -1), ring_(static_cast<size_t>(std::max(capacity, 16))) {}
+    : flex_sign_(flex_sign >= 0 ? 1 : -1),
+      ring_(static_cast<size_t>(std::max(capacity, 16))),
+      windows_(static_cast<size_t>(std::ceil(kForgetS / kWindowS))) {}
 
 void HingeAxisEstimator::reset(int64_t t_ns) {
   head_ = count_ = 0;
-  t0_ns_ = t_prev_ns_ = t_entry_ns_ = t_solve_ns_ = t_ns;
+  t0_ns_ = t_prev_ns_ = t_entry_ns_ = t_solve_ns_ = t_window_ns_ = t_ns;
+  for (Window& w : windows_)
+    w = Window{};
+  window_head_ = 0;
   i1_.setZero();
   i2_.setZero();
   normal_.setZero();
-  normal_h_.setZero();
-  heading_.reset();
   d_rad_ = 0;
-  d_known_ = false;
   relative_sign_known_ = false;
   sum_.setZero();
   weight_ = 0;
@@ -67,19 +67,6 @@ void HingeAxisEstimator::add(const Eigen::Quaterniond& q1, const Eigen::Quaterni
   t_prev_ns_ = t_ns;
   i1_ += w1 * dt_s;
   i2_ += w2 * dt_s;
-  // The two frames' relative heading, followed with the axes found (read afresh from a
-  // sample when there is none yet).
-  if (known_) {
-    const Eigen::Vector3d e1 = q1 * j1_, e2 = q2 * j2_;
-    if (!d_known_) {
-      // From a sample where both axes lie near the horizontal (else their heading is noise).
-      d_known_ = std::hypot(e1.x(), e1.y()) > 0.7 && std::hypot(e2.x(), e2.y()) > 0.7;
-      d_rad_ = yaw_between_rad(e2, e1);
-    } else {
-      heading_.add(e1, yaw_rotation(d_rad_) * e2, dt_s);
-      d_rad_ = wrap_angle_rad(d_rad_ + heading_.take());
-    }
-  }
   const double since_s = static_cast<double>(t_ns - t_entry_ns_) * 1e-9;
   if (since_s < kSampleEveryS) return;
   t_entry_ns_ = t_ns;
@@ -91,16 +78,22 @@ void HingeAxisEstimator::add(const Eigen::Quaterniond& q1, const Eigen::Quaterni
   normal_ = keep * normal_ + v * v.transpose();
   sum_ = keep * sum_ + v;
   weight_ = keep * weight_ + 1;
-  // The horizontal rows, x and y of q1 j1 - Rz(d) q2 j2, once the relative heading is followed.
-  normal_h_ *= keep;
-  if (d_known_ && relative_sign_known_) {
+  // The horizontal rows, x and y of q1 j1 - Rz(d) q2 j2, in the current window.
+  if (static_cast<double>(t_ns - t_window_ns_) * 1e-9 >= kWindowS) {
+    t_window_ns_ = t_ns;
+    window_head_ = (window_head_ + 1) % static_cast<int>(windows_.size());
+    windows_[static_cast<size_t>(window_head_)] = Window{};
+  }
+  {
+    Window& w = windows_[static_cast<size_t>(window_head_)];
     const Eigen::Matrix3d r1 = q1.normalized().toRotationMatrix(),
-                          r2 = (yaw_rotation(d_rad_) * q2.normalized()).toRotationMatrix();
-    for (int k = 0; k < 2; ++k) {
-      Eigen::Matrix<double, 6, 1> row;
-      row << r1.row(k).transpose(), -r2.row(k).transpose();
-      normal_h_ += row * row.transpose();
-    }
+                          r2 = q2.normalized().toRotationMatrix();
+    const Eigen::Vector3d x1 = r1.row(0), y1 = r1.row(1), x2 = r2.row(0), y2 = r2.row(1);
+    w.a += x1 * x1.transpose() + y1 * y1.transpose();
+    w.b += x2 * x2.transpose() + y2 * y2.transpose();
+    w.cc += x1 * x2.transpose() + y1 * y2.transpose();
+    w.cs += y1 * x2.transpose() - x1 * y2.transpose();
+    ++w.n;
   }
   // The joint angle's integrals while either segment turns (for the signs).
   if (w1.norm() > 0.3 || w2.norm() > 0.3) {
@@ -127,7 +120,7 @@ void HingeAxisEstimator::solve() {
   if (cov.block<3, 3>(0, 0).trace() < kMinEvidence * 0.5 ||
       cov.block<3, 3>(3, 3).trace() < kMinEvidence * 0.5)
     return;
-  const Eigen::Matrix<double, 6, 6> whole = normal_ + normal_h_;
+  const Eigen::Matrix<double, 6, 6> whole = normal_ + horizontal_rows();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(whole);
   const Eigen::Matrix<double, 6, 1> x = es.eigenvectors().col(0);
   const double n1 = x.head<3>().norm(), n2 = x.tail<3>().norm();
@@ -144,7 +137,6 @@ void HingeAxisEstimator::solve() {
   const double var = residual2 + kResidualFloor * kResidualFloor;
   sigma_deg_ = std::min(
       180.0, std::sqrt(var / (std::max(std::min(k1, k2), 1e-12) * independent)) * kDegPerRad);
-  const Eigen::Vector3d prev1 = j1_, prev2 = j2_;
   j1_ = j1;
   j2_ = j2;
   // The fit fixes the axes' relative sign where the axis' elevation varied: one axis flipped
@@ -161,13 +153,26 @@ void HingeAxisEstimator::solve() {
   relative_sign_known_ = std::max(flipped2, elevation2) >
                          kRelativeSignRatio * (std::min(flipped2, elevation2) + kFloor2);
   choose_signs(relative_sign_known_);
-  // Axes that moved far (30 deg; a sign chosen the other way): the relative heading is read
-  // afresh from the next sample, and the rows taken with the old one are dropped.
-  if (known_ && (j1_.dot(prev1) < kAfreshCos || j2_.dot(prev2) < kAfreshCos)) {
-    d_known_ = false;
-    normal_h_.setZero();
-  }
   known_ = updated_ = true;
+}
+
+Eigen::Matrix<double, 6, 6> HingeAxisEstimator::horizontal_rows() {
+  Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+  if (!known_ || !relative_sign_known_) return h;  // the rows need the axes' relative sign
+  const int n = static_cast<int>(windows_.size());
+  for (int k = 1; k <= n; ++k) {  // oldest first: d_rad_ ends as the newest window's
+    const Window& w = windows_[static_cast<size_t>((window_head_ + k) % n)];
+    if (w.n == 0) continue;
+    const double c = j1_.dot(w.cc * j2_), s = j1_.dot(w.cs * j2_);
+    if (std::hypot(c, s) < 1e-9) continue;  // both axes vertical throughout: no heading in it
+    d_rad_ = std::atan2(s, c);
+    const Eigen::Matrix3d m = std::cos(d_rad_) * w.cc + std::sin(d_rad_) * w.cs;
+    h.block<3, 3>(0, 0) += w.a;
+    h.block<3, 3>(0, 3) -= m;
+    h.block<3, 3>(3, 0) -= m.transpose();
+    h.block<3, 3>(3, 3) += w.b;
+  }
+  return h;
 }
 
 void HingeAxisEstimator::choose_signs(bool relative_sign_known) {

@@ -104,8 +104,7 @@ TEST(HingeAxisEstimator, FindsEachSensorsAxisForAnyStrapAndHeading) {
 TEST(HingeAxisEstimator, FollowsTheFramesRelativeHeadingAsOneDrifts) {
   // The lower sensor's 6D frame drifts 0.5 deg/s (30 deg in the minute): the axes stay found
   // and the relative heading (q1 j1 = Rz(d) q2 j2, d = yaw1 - yaw2) follows it within the lag
-  // of its 2 s time constant (1 deg) and what the axes' own error (within 2 deg each) turns it
-  // (measured 3.5 deg).
+  // of its 5 s windows (about 1 deg) and what the axes' own error (within 2 deg each) turns it.
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> yaw(-M_PI, M_PI);
   constexpr double kDriftRadS = 0.5 * kRadPerDeg, kSeconds = 60;

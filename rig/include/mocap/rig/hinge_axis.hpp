@@ -14,10 +14,14 @@
 // The constraint's normal matrix, sum of v v^T with v = [u1; -u2] (6x6), is kept with
 // forgetting (kForgetS). Once an answer has fixed the axes' relative sign, the whole hinge
 // constraint joins it: q1 j1 = Rz(d) q2 j2, whose horizontal rows need d, the two 6D frames'
-// relative heading; it is followed with the axes found (HingeHeading, 2 s) and read afresh when
-// they move far. On the real run the elevation alone leaves the axes 4-8 deg from the best
-// hindsight fit after 100 s and 20-40 deg off in the first minute; with the horizontal rows the
-// knees held to them sit 10.4 / 11.9 deg off their hinge instead of 15.5 / 17.2
+// relative heading. d drifts, so it is taken per kWindowS window and fitted afresh to the axes
+// at every solve: each window keeps its rows in a form any d can be put into (Window), so the
+// fit alternates between the axes and the windows' headings, a least-squares fit of both over
+// the last kForgetS. (Following d with the axes as they were and adding rows with it, as
+// before, made rows agree with whatever axes the fit had: in a long stand the left knee's
+// axes walked 20-25 deg off; the real knees 10.4 / 11.9 deg -> 9.9 / 11.6.) On the real run
+// the elevation alone leaves the axes 4-8 deg from the best hindsight fit after 100 s and
+// 20-40 deg off in the first minute, the knees held to them 15.5 / 17.2 deg off their hinge
 // (scripts/qmt-knees). The least eigenvector, each half normalised, is the pair of axes. The
 // gap to the next eigenvalue gives the one-sigma (a motion that tilts both segments the same
 // way all the time leaves two near-equal ones: no answer). The relative sign is judged from
@@ -38,8 +42,6 @@
 #include <cstdint>
 #include <vector>
 
-#include "mocap/rig/hinge_heading.hpp"
-
 namespace mocap::rig {
 
 class HingeAxisEstimator {
@@ -47,6 +49,8 @@ class HingeAxisEstimator {
   static constexpr double kSolveEveryS = 1.0;
   static constexpr double kSampleEveryS = 0.02;  ///< at most one sample per this
   static constexpr double kForgetS = 120.0;
+  /// The two frames' relative heading is taken as constant over a window this long.
+  static constexpr double kWindowS = 5.0;
   /// Before a first answer: this much tilt evidence (sum of |u - u_mean|^2 over samples).
   static constexpr double kMinEvidence = 20.0;
   static constexpr double kOvershootDeg = 15.0;
@@ -83,6 +87,9 @@ class HingeAxisEstimator {
     Eigen::Vector3d i1, i2;  ///< rates integrated since reset
   };
   void solve();
+  /// The horizontal rows of every window, each with the relative heading that fits the axes
+  /// as they are (d_rad_ set to the newest window's).
+  Eigen::Matrix<double, 6, 6> horizontal_rows();
   void choose_signs(bool relative_sign_known);
 
   int flex_sign_;
@@ -92,12 +99,22 @@ class HingeAxisEstimator {
   Eigen::Vector3d i1_ = Eigen::Vector3d::Zero(), i2_ = Eigen::Vector3d::Zero();
   Eigen::Matrix<double, 6, 6> normal_ = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> sum_ = Eigen::Matrix<double, 6, 1>::Zero();
-  /// The horizontal rows of the whole constraint q1 j1 = Rz(d) q2 j2 (d as tracked then).
-  Eigen::Matrix<double, 6, 6> normal_h_ = Eigen::Matrix<double, 6, 6>::Zero();
-  /// Follows d for the rows: quickly (they need the frames' relative heading of the moment).
-  HingeHeading heading_{HingeHeadingOptions{2.0}};
+  /// The horizontal rows of one kWindowS window, kept so that any relative heading d can be
+  /// put in at a solve: with r the rows x, y of each sample's rotation matrix (R1, R2),
+  /// a = sum r1 r1^T, b = sum r2 r2^T, cc = sum r1_x r2_x^T + r1_y r2_y^T,
+  /// cs = sum r1_y r2_x^T - r1_x r2_y^T; the rows of q1 j1 = Rz(d) q2 j2 then sum to
+  /// [[a, -m], [-m^T, b]] with m = cos(d) cc + sin(d) cs, and the d that fits axes j1, j2 best
+  /// is atan2(j1^T cs j2, j1^T cc j2).
+  struct Window {
+    Eigen::Matrix3d a = Eigen::Matrix3d::Zero(), b = Eigen::Matrix3d::Zero(),
+                    cc = Eigen::Matrix3d::Zero(), cs = Eigen::Matrix3d::Zero();
+    int n = 0;
+  };
+  /// The last kForgetS of windows, a ring; the newest is being filled.
+  std::vector<Window> windows_;
+  int window_head_ = 0;
+  int64_t t_window_ns_ = 0;
   double d_rad_ = 0;
-  bool d_known_ = false;
   bool relative_sign_known_ = false;
   double weight_ = 0;
   bool known_ = false, updated_ = false;
