@@ -8,7 +8,6 @@
 #include <cmath>
 
 #include "mocap/core/units.hpp"
-#include "mocap/skeleton/quat_math.hpp"
 
 namespace mocap::rig {
 namespace {

@@ -9,17 +9,14 @@
 
 namespace mocap::rig {
 
-double yaw_between_rad(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
-  return wrap_angle_rad(heading_of_rad(to) - heading_of_rad(from));
-}
-
 void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, double dt_s) {
   if (!(dt_s > 0) || dt_s > 0.1) return;
   if (!y1.allFinite() || !y2.allFinite()) return;
   const double h1 = std::hypot(y1.x(), y1.y()), h2 = std::hypot(y2.x(), y2.y());
   const double weight = std::min(h1, h2) * std::min(h1, h2);
   if (weight < 1e-3) return;
-  const double error_rad = yaw_between_rad(y2, y1);
+  // The yaw taking the lower axis' horizontal direction onto the upper's.
+  const double error_rad = wrap_angle_rad(heading_of_rad(y1) - heading_of_rad(y2));
   if (std::abs(error_rad) > opt_.max_error_deg * kRadPerDeg) {
     ++refused_;
     return;

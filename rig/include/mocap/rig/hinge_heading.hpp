@@ -26,10 +26,6 @@ struct HingeHeadingOptions {
   double max_error_deg = 45.0;  ///< a larger error is refused, not followed
 };
 
-/// The yaw turning direction `from`'s horizontal part onto `to`'s, rad in [-pi, pi] (the
-/// heading formula, heading_of_rad, of each; 0 where either is vertical).
-double yaw_between_rad(const Eigen::Vector3d& from, const Eigen::Vector3d& to);
-
 class HingeHeading {
  public:
   explicit HingeHeading(HingeHeadingOptions o = {}) : opt_(o) {}
