@@ -22,6 +22,9 @@ namespace {
 /// on, the knee would turn away from it.
 const double kCosHingeAgree = std::cos(10.0 * kRadPerDeg);
 
+/// The joint holds turn their segments' headings at 10 Hz, as the other heading alignments.
+constexpr int64_t kHoldEveryNs = 100'000'000;
+
 /// The configured setup with each sensor's site normal filled in (its own, or its segment's
 /// standard site; none for a sensor strapped anyhow).
 CalibrationSetup calibration_setup(const std::vector<TrackerSensor>& sensors,
@@ -70,6 +73,8 @@ BodyTracker::BodyTracker(const BodyModel& model, const JointLimits& limits,
                 HingeHeading{}},
                {index(Segment::thigh_r), index(Segment::shank_r), HingeAxisEstimator(1),
                 HingeHeading{}}}},
+      ranges_{
+          {{index(Segment::thigh_l), RangeHeading{}}, {index(Segment::thigh_r), RangeHeading{}}}},
       w_rad_s_(sensors_.size(), Eigen::Vector3d::Zero()),
       last_output_(sensors_.size(), AttitudeFilter(opt_.filter).output()) {
   opt_.calibration = calibration_setup(sensors_, opt_);
@@ -179,6 +184,8 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
     if (h.axis.updated()) apply_hinge_axes(h);
     hold_hinge_heading(h, q, dt_s, s.t_host_ns);
   }
+  for (RangeJoint& r : ranges_)
+    if (r.child == seg) hold_range_heading(r, q, dt_s, s.t_host_ns);
   // 6. 6D: the heading of the sensors whose facing is still unknown, from motion.
   if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
     feed_heading_from_motion(i, s, q, o.gyro_bias_rad_s);
@@ -218,6 +225,10 @@ void BodyTracker::finish_calibration() {
     h.heading.reset();
     h.heading_applied_t_ns = 0;
   }
+  for (RangeJoint& r : ranges_) {
+    r.heading.reset();
+    r.heading_applied_t_ns = 0;
+  }
 }
 
 void BodyTracker::apply_hinge_axes(Hinge& h) {
@@ -249,7 +260,6 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
 
 void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s,
                                      int64_t t_ns) {
-  constexpr int64_t kEveryNs = 100'000'000;  // 10 Hz, as the other heading alignments
   const SegmentAlignment &au = align_.segment(h.upper), &al = align_.segment(h.lower);
   if (!au.aligned || !al.aligned || !au.own_frame || !al.own_frame || !h.axis.known()) return;
   const Calibration& c = align_.calibration();
@@ -262,16 +272,33 @@ void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, doub
   const int up = skeleton_.rig().sensor_for_segment[h.upper];
   h.heading.add(c.segment_from_sensor(h.upper, q_earth_sensor(up)) * Eigen::Vector3d::UnitY(),
                 c.segment_from_sensor(h.lower, q) * Eigen::Vector3d::UnitY(), dt_s);
-  if (t_ns - h.heading_applied_t_ns < kEveryNs) return;
+  if (t_ns - h.heading_applied_t_ns < kHoldEveryNs) return;
   h.heading_applied_t_ns = t_ns;
   if (h.heading.take_refused() > 0) align_.reject_turn(h.lower);
   // Neither segment's 6D frame is known better than the other's: each turns half way (CMU 6D,
   // 24 clips x 3 seeds: turning the shank alone onto the thigh took a thigh's drift into the
-  // shank, worst segment excess 2.4 -> 7.1 deg; half way 3.0 at tau 2 s, 2.4 at 10 s).
+  // shank, worst segment excess 2.4 -> 7.1 deg; half way with the hips' range holds 2.9).
   const double yaw = h.heading.take();
   if (yaw == 0) return;
   align_.turn_heading(h.lower, 0.5 * yaw, AlignSource::joint, al.heading_sigma_deg);
   align_.turn_heading(h.upper, -0.5 * yaw, AlignSource::joint, au.heading_sigma_deg);
+}
+
+void BodyTracker::hold_range_heading(RangeJoint& r, const Eigen::Quaterniond& q, double dt_s,
+                                     int64_t t_ns) {
+  const int parent = kSegmentParent[r.child];
+  const SegmentAlignment &ac = align_.segment(r.child), &ap = align_.segment(parent);
+  if (!ac.aligned || !ap.aligned || !ac.own_frame) return;
+  const Calibration& c = align_.calibration();
+  const int up = skeleton_.rig().sensor_for_segment[parent];
+  if (up < 0) return;
+  r.heading.add(skeleton_.limits().joint[r.child],
+                c.segment_from_sensor(parent, q_earth_sensor(up)),
+                c.segment_from_sensor(r.child, q), dt_s);
+  if (t_ns - r.heading_applied_t_ns < kHoldEveryNs) return;
+  r.heading_applied_t_ns = t_ns;
+  const double yaw = r.heading.take();
+  if (yaw != 0) align_.turn_heading(r.child, yaw, AlignSource::joint, ac.heading_sigma_deg);
 }
 
 void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing) {

@@ -16,6 +16,8 @@
 //      frame; fitted as a hinge it turned the arms 30-140 deg off in 6D after an N-pose alone
 //      (24 CMU clips, mean 12.9 deg against 4.4 without); in 6D each knee's two segments'
 //      relative heading is then held to its hinge (hinge_heading.hpp), each turning half way,
+//      and each thigh's heading to its hip's range (range_heading.hpp: a heading a clipped
+//      gyro lost),
 //   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
 //      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted,
 //   7. the skeleton's input (orientation and flags);
@@ -43,6 +45,7 @@
 #include "mocap/rig/local_field_watch.hpp"
 #include "mocap/rig/mounting_motion.hpp"
 #include "mocap/rig/pose_capture.hpp"
+#include "mocap/rig/range_heading.hpp"
 #include "mocap/rig/sensor_health.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
@@ -220,6 +223,16 @@ class BodyTracker {
   /// its lower segment's sensor (orientation q, dt_s since its previous sample).
   void hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s, int64_t t_ns);
   std::array<Hinge, 2> hinges_;
+  /// Per hip: its thigh and the hold of the thigh's heading to the hip's range.
+  struct RangeJoint {
+    int child;
+    RangeHeading heading;
+    int64_t heading_applied_t_ns = 0;
+  };
+  /// 6D: the child's heading held to its joint's range (range_heading.hpp), from a sample of
+  /// its sensor (orientation q, dt_s since its previous sample).
+  void hold_range_heading(RangeJoint& r, const Eigen::Quaterniond& q, double dt_s, int64_t t_ns);
+  std::array<RangeJoint, 2> ranges_;
   std::vector<Eigen::Vector3d> w_rad_s_;  ///< per sensor: its newest bias-free rate
   void apply_heading_from_motion(int64_t t_ns);
   /// Hands the sensors the calibration found off the body heading to their field watch.

@@ -18,11 +18,11 @@ namespace mocap::rig {
 
 struct HingeHeadingOptions {
   /// Time constant of the correction, seconds. The real run's knees (scripts/qmt-knees) sit
-  /// closer to their hinge the faster it is (2 s: 8.9 / 10.0 deg, 10 s: 9.9 / 11.6), the CMU
-  /// runs' worst segment excess is lower the slower: a segment whose own heading is lost (CMU
-  /// 01_12's left leg, its gyros clipped) pulls its neighbour half way (6D sites 3.0 deg at
-  /// 2 s, 2.4 at 10 s; random straps 5.3 at 2 s, 4.4 at 5 s, 3.3 at 10 s; docs/accuracy.md).
-  double tau_s = 10.0;
+  /// closer to their hinge the faster it is (2 s: 8.9 / 10.0 deg, 10 s: 9.9 / 11.6). A segment
+  /// whose own heading is lost (CMU 01_12's left leg, its gyros clipped) pulls its neighbour
+  /// half way, the faster the sooner (random straps' worst segment excess 5.3 deg at 2 s, 3.3 at
+  /// 10 s) unless its hip's range brings it back first (range_heading.hpp: 2.97 at 2 s).
+  double tau_s = 2.0;
   double max_error_deg = 45.0;  ///< a larger error is refused, not followed
 };
 
