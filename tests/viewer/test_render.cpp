@@ -5,8 +5,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "mocap/outputs/posture_shm.hpp"
@@ -38,10 +41,16 @@ class Render : public ::testing::Test {
     // Under ASan: GLFW dlcloses libGL at exit, so the GL driver's own leaks are reported from an
     // "<unknown module>" that tests/lsan.supp cannot name; leak checking stays on for the
     // viewer's code in test_viewer_core.
+    const std::string err = "/tmp/mocap-viewer-render-" + std::to_string(getpid()) + ".err";
     const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS}:detect_leaks=0\" " +
-                            std::string(MOCAP_VIEWER_EXE) + " " + args +
-                            " 2>/tmp/mocap-viewer-render.err";
+                            std::string(MOCAP_VIEWER_EXE) + " " + args + " 2>" + err;
     const int rc = std::system(cmd.c_str());
+    // A failed run says why in the test's output (the viewer's own message).
+    std::ifstream in(err);
+    const std::string said((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (rc != 0)
+      std::fprintf(stderr, "mocap-viewer %s: rc %d: %s\n", args.c_str(), rc, said.c_str());
+    std::remove(err.c_str());
     return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
   }
   /// Renders the published pose without HUD, labels, earth axes or shadows.

@@ -9,9 +9,10 @@
 // Deimel, Seel, arXiv:2002.00639). It is taken only where a turn about the vertical is what brings
 // the joint back (a thigh lifted beyond its flexion range is a tilt or a real pose, not a heading),
 // and integrated with time constant tau_s like the hinge's hold; the caller turns the child.
-// Measured on CMU 6D (scripts/accuracy-report): without the margin a real hip beyond the
-// table's 45 deg for seconds (01_14) turned its thigh 8 deg; the wrists' and ankles' ranges are
-// left out: ordinary clips reach beyond them as the performer maps them (a hand 37 deg off).
+// The body tracker holds the hips only. Measured on CMU 6D (scripts/accuracy-report, 24 clips x
+// 3 seeds): without the margin a real hip beyond the table's 45 deg for seconds (01_14) turned
+// its thigh 8 deg; every ball joint held with no margin turned a hand 37 deg off (ordinary clips
+// reach beyond the wrists' table ranges as the performer maps them).
 #pragma once
 
 #include <Eigen/Geometry>
