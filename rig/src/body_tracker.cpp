@@ -22,9 +22,6 @@ namespace {
 /// on, the knee would turn away from it.
 const double kCosHingeAgree = std::cos(10.0 * kRadPerDeg);
 
-/// The joint holds turn their segments' headings at 10 Hz, as the other heading alignments.
-constexpr int64_t kHoldEveryNs = 100'000'000;
-
 /// The configured setup with each sensor's site normal filled in (its own, or its segment's
 /// standard site; none for a sensor strapped anyhow).
 CalibrationSetup calibration_setup(const std::vector<TrackerSensor>& sensors,
@@ -223,12 +220,9 @@ void BodyTracker::finish_calibration() {
   for (Hinge& h : hinges_) {
     h.axis.reset(captured.capture.pose == CalibrationPose::npose ? captured.capture.t_end_ns : 0);
     h.heading.reset();
-    h.heading_applied_t_ns = 0;
   }
-  for (RangeJoint& r : ranges_) {
+  for (RangeJoint& r : ranges_)
     r.heading.reset();
-    r.heading_applied_t_ns = 0;
-  }
 }
 
 void BodyTracker::apply_hinge_axes(Hinge& h) {
@@ -272,8 +266,7 @@ void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, doub
   const int up = skeleton_.rig().sensor_for_segment[h.upper];
   h.heading.add(c.segment_from_sensor(h.upper, q_earth_sensor(up)) * Eigen::Vector3d::UnitY(),
                 c.segment_from_sensor(h.lower, q) * Eigen::Vector3d::UnitY(), dt_s);
-  if (t_ns - h.heading_applied_t_ns < kHoldEveryNs) return;
-  h.heading_applied_t_ns = t_ns;
+  if (!h.heading.due(t_ns)) return;
   if (h.heading.take_refused() > 0) align_.reject_turn(h.lower);
   // Neither segment's 6D frame is known better than the other's: each turns half way (CMU 6D,
   // 24 clips x 3 seeds: turning the shank alone onto the thigh took a thigh's drift into the
@@ -295,8 +288,7 @@ void BodyTracker::hold_range_heading(RangeJoint& r, const Eigen::Quaterniond& q,
   r.heading.add(skeleton_.limits().joint[r.child],
                 c.segment_from_sensor(parent, q_earth_sensor(up)),
                 c.segment_from_sensor(r.child, q), dt_s);
-  if (t_ns - r.heading_applied_t_ns < kHoldEveryNs) return;
-  r.heading_applied_t_ns = t_ns;
+  if (!r.heading.due(t_ns)) return;
   const double yaw = r.heading.take();
   if (yaw != 0) align_.turn_heading(r.child, yaw, AlignSource::joint, ac.heading_sigma_deg);
 }

@@ -21,13 +21,7 @@ void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, dou
     ++refused_;
     return;
   }
-  pending_rad_ += weight * error_rad * std::min(dt_s / opt_.tau_s, 1.0);
-}
-
-double HingeHeading::take() {
-  const double yaw = pending_rad_;
-  pending_rad_ = 0;
-  return yaw;
+  pending_.add(weight * error_rad * std::min(dt_s / opt_.tau_s, 1.0));
 }
 
 int HingeHeading::take_refused() {
@@ -37,7 +31,7 @@ int HingeHeading::take_refused() {
 }
 
 void HingeHeading::reset() {
-  pending_rad_ = 0;
+  pending_.reset();
   refused_ = 0;
 }
 

@@ -27,13 +27,7 @@ void RangeHeading::add(const JointLimit& limit, const Eigen::Quaterniond& q_eart
   if (!(turned.violation_deg < now.violation_deg - 0.5 * std::abs(yaw_rad) * kDegPerRad)) return;
   // Back to the margin, not to the range: a real joint may reach beyond the table's range.
   const double share = (now.violation_deg - opt_.margin_deg) / now.violation_deg;
-  pending_rad_ -= share * yaw_rad * std::min(dt_s / opt_.tau_s, 1.0);
-}
-
-double RangeHeading::take() {
-  const double yaw = pending_rad_;
-  pending_rad_ = 0;
-  return yaw;
+  pending_.add(-share * yaw_rad * std::min(dt_s / opt_.tau_s, 1.0));
 }
 
 }  // namespace mocap::rig

@@ -1,7 +1,7 @@
 // A knee's relative heading held to its hinge (rig/hinge_heading.hpp): the lower segment's
 // axis, seen in a frame that drifts against the upper's, is turned back onto the upper's axis
-// within the correction's time constant; an error no drift can make is refused and counted; a
-// vertical axis says nothing about heading.
+// within the correction's time constant, handed over at 10 Hz; an error no drift can make is
+// refused and counted; a vertical axis says nothing about heading.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -18,8 +18,8 @@ Eigen::Vector3d turned_by_yaw(const Eigen::Vector3d& v, double yaw_rad) {
 }
 
 /// Runs the hold at 100 Hz for `seconds`: the body turns, the hinge's axis tilts a little, the
-/// lower frame is off by offset0_rad and drifts at drift_rad_s; each 0.1 s the correction is
-/// applied. Returns the lower frame's error left at the end, rad.
+/// lower frame is off by offset0_rad and drifts at drift_rad_s; the correction is applied
+/// whenever the hold says it is due (10 Hz). Returns the lower frame's error left at the end, rad.
 double run(HingeHeading& hold, double seconds, double offset0_rad, double drift_rad_s) {
   constexpr double dt = 0.01;
   double applied_rad = 0;
@@ -31,7 +31,7 @@ double run(HingeHeading& hold, double seconds, double offset0_rad, double drift_
                       0.8 * std::sin(0.1 * t));
     error_rad = offset0_rad + drift_rad_s * t - applied_rad;
     hold.add(axis, turned_by_yaw(axis, error_rad), dt);
-    if (n % 10 == 0) applied_rad -= hold.take();
+    if (hold.due(static_cast<int64_t>(n) * 10'000'000)) applied_rad -= hold.take();
   }
   return error_rad;
 }
@@ -50,6 +50,27 @@ TEST(HingeHeading, TurnsAnOffsetBackAndFollowsADrift) {
   EXPECT_GT(lag_rad, 1.5 * kRadPerDeg);
   EXPECT_LT(lag_rad, 2.5 * kRadPerDeg);
   EXPECT_EQ(b.take_refused(), 0);
+}
+
+TEST(PendingYaw, HandsOverAtTenHertzAndStartsOverOnReset) {
+  PendingYaw p;
+  int handed = 0;
+  double taken_rad = 0;
+  for (int64_t t_ns = 10'000'000; t_ns <= 1'000'000'000; t_ns += 10'000'000) {  // 1 s at 100 Hz
+    p.add(0.01);
+    if (p.due(t_ns)) {
+      ++handed;
+      taken_rad += p.take();
+    }
+  }
+  EXPECT_EQ(handed, 10);
+  EXPECT_NEAR(taken_rad + p.take(), 1.0, 1e-12);  // nothing lost between hand-overs
+  EXPECT_EQ(p.take(), 0.0);
+  p.add(0.5);
+  EXPECT_FALSE(p.due(1'010'000'000));  // 10 ms after the last hand-over
+  p.reset();  // a new calibration: nothing pending, a hand-over due at once
+  EXPECT_EQ(p.take(), 0.0);
+  EXPECT_TRUE(p.due(1'010'000'000));
 }
 
 TEST(HingeHeading, RefusesAnErrorNoDriftMakes) {

@@ -217,7 +217,6 @@ class BodyTracker {
     int upper, lower;
     HingeAxisEstimator axis;
     HingeHeading heading;
-    int64_t heading_applied_t_ns = 0;
   };
   /// 6D: the hinge's relative heading held to its axis (hinge_heading.hpp), from a sample of
   /// its lower segment's sensor (orientation q, dt_s since its previous sample).
@@ -227,7 +226,6 @@ class BodyTracker {
   struct RangeJoint {
     int child;
     RangeHeading heading;
-    int64_t heading_applied_t_ns = 0;
   };
   /// 6D: the child's heading held to its joint's range (range_heading.hpp), from a sample of
   /// its sensor (orientation q, dt_s since its previous sample).

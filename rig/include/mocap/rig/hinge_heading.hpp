@@ -13,6 +13,9 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstdint>
+
+#include "mocap/rig/pending_yaw.hpp"
 
 namespace mocap::rig {
 
@@ -34,9 +37,11 @@ class HingeHeading {
   /// earth frame as that segment is aligned now; dt_s since the last sample. Never allocates.
   void add(const Eigen::Vector3d& axis_earth_upper, const Eigen::Vector3d& axis_earth_lower,
            double dt_s);
+  /// Whether the caller should take the yaw now, at t_ns (at 10 Hz: pending_yaw.hpp).
+  bool due(int64_t t_ns) { return pending_.due(t_ns); }
   /// The yaw by which the lower segment's heading should turn (relative to the upper's) since
   /// the last call, rad; the caller applies it (pending starts over).
-  double take();
+  double take() { return pending_.take(); }
   /// Samples whose error was refused since the last call to take_refused().
   int take_refused();
   /// Starts over (the alignment was rebuilt).
@@ -44,7 +49,7 @@ class HingeHeading {
 
  private:
   HingeHeadingOptions opt_;
-  double pending_rad_ = 0;
+  PendingYaw pending_;
   int refused_ = 0;
 };
 

@@ -16,7 +16,9 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstdint>
 
+#include "mocap/rig/pending_yaw.hpp"
 #include "mocap/skeleton/joint_limits.hpp"
 
 namespace mocap::rig {
@@ -34,15 +36,17 @@ class RangeHeading {
   /// earth frame as they are aligned now; dt_s since the last sample. Never allocates.
   void add(const JointLimit& limit, const Eigen::Quaterniond& q_earth_parent,
            const Eigen::Quaterniond& q_earth_child, double dt_s);
+  /// Whether the caller should take the yaw now, at t_ns (at 10 Hz: pending_yaw.hpp).
+  bool due(int64_t t_ns) { return pending_.due(t_ns); }
   /// The yaw by which the child's heading should turn since the last call, rad; the caller
   /// applies it (pending starts over).
-  double take();
+  double take() { return pending_.take(); }
   /// Starts over (the alignment was rebuilt).
-  void reset() { pending_rad_ = 0; }
+  void reset() { pending_.reset(); }
 
  private:
   RangeHeadingOptions opt_;
-  double pending_rad_ = 0;
+  PendingYaw pending_;
 };
 
 }  // namespace mocap::rig
