@@ -26,6 +26,24 @@ namespace {
 
 constexpr int kW = 480, kH = 360;
 
+/// Runs mocap-viewer with `args` (`env`: what `env` should change first); returns its exit
+/// status.
+int run_viewer(const std::string& args, const std::string& env = "") {
+  // Under ASan: GLFW dlcloses libGL at exit, so the GL driver's own leaks are reported from an
+  // "<unknown module>" that tests/lsan.supp cannot name; leak checking stays on for the
+  // viewer's code in test_viewer_core.
+  const std::string err = "/tmp/mocap-viewer-render-" + std::to_string(getpid()) + ".err";
+  const std::string cmd = "env " + env + " ASAN_OPTIONS=\"${ASAN_OPTIONS}:detect_leaks=0\" " +
+                          std::string(MOCAP_VIEWER_EXE) + " " + args + " 2>" + err;
+  const int rc = std::system(cmd.c_str());
+  // A failed run says why in the test's output (the viewer's own message).
+  std::ifstream in(err);
+  const std::string said((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (rc != 0) std::fprintf(stderr, "mocap-viewer %s: rc %d: %s\n", args.c_str(), rc, said.c_str());
+  std::remove(err.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
 class Render : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -36,23 +54,7 @@ class Render : public ::testing::Test {
   }
   void TearDown() override { std::remove(png_.c_str()); }
 
-  /// Runs mocap-viewer with `args`; returns its exit status.
-  static int run(const std::string& args) {
-    // Under ASan: GLFW dlcloses libGL at exit, so the GL driver's own leaks are reported from an
-    // "<unknown module>" that tests/lsan.supp cannot name; leak checking stays on for the
-    // viewer's code in test_viewer_core.
-    const std::string err = "/tmp/mocap-viewer-render-" + std::to_string(getpid()) + ".err";
-    const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS}:detect_leaks=0\" " +
-                            std::string(MOCAP_VIEWER_EXE) + " " + args + " 2>" + err;
-    const int rc = std::system(cmd.c_str());
-    // A failed run says why in the test's output (the viewer's own message).
-    std::ifstream in(err);
-    const std::string said((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (rc != 0)
-      std::fprintf(stderr, "mocap-viewer %s: rc %d: %s\n", args.c_str(), rc, said.c_str());
-    std::remove(err.c_str());
-    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-  }
+  static int run(const std::string& args) { return run_viewer(args); }
   /// Renders the published pose without HUD, labels, earth axes or shadows.
   RgbImage render_published(const PoseFrame& f, const std::string& extra = "") {
     writer_->publish(f);
@@ -339,14 +341,9 @@ TEST_F(Render, MissingDaemonAndBadOptionsAreReported) {
 // --screenshot without any display server: EGL on Mesa's surfaceless platform.
 TEST(RenderWithoutDisplay, ScreenshotNeedsNoXServer) {
   const std::string png = "/tmp/mocap-viewer-nodisplay-" + std::to_string(getpid()) + ".png";
-  const std::string cmd =
-      "env -u DISPLAY -u WAYLAND_DISPLAY ASAN_OPTIONS=\"${ASAN_OPTIONS}:detect_leaks=0\" " +
-      std::string(MOCAP_VIEWER_EXE) +
-      " --source synthetic --frames 2 --size 200x150 --screenshot " + png +
-      " 2>/tmp/mocap-viewer-nodisplay.err";
-  const int rc = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(rc));
-  ASSERT_EQ(WEXITSTATUS(rc), 0);
+  ASSERT_EQ(run_viewer("--source synthetic --frames 2 --size 200x150 --screenshot " + png,
+                       "-u DISPLAY -u WAYLAND_DISPLAY"),
+            0);
   const RgbImage img = read_png(png);
   EXPECT_EQ(img.width, 200);
   EXPECT_EQ(img.height, 150);
