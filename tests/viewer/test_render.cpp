@@ -54,13 +54,12 @@ class Render : public ::testing::Test {
   }
   void TearDown() override { std::remove(png_.c_str()); }
 
-  static int run(const std::string& args) { return run_viewer(args); }
   /// Renders the published pose without HUD, labels, earth axes or shadows.
   RgbImage render_published(const PoseFrame& f, const std::string& extra = "") {
     writer_->publish(f);
     const std::string size = std::to_string(kW) + "x" + std::to_string(kH);
-    EXPECT_EQ(run("--shm " + shm_ + " --screenshot " + png_ + " --frames 2 --size " + size +
-                  " --no-hud --no-labels --no-earth-axes --no-shadows " + extra),
+    EXPECT_EQ(run_viewer("--shm " + shm_ + " --screenshot " + png_ + " --frames 2 --size " + size +
+                         " --no-hud --no-labels --no-earth-axes --no-shadows " + extra),
               0);
     return read_png(png_);
   }
@@ -177,9 +176,9 @@ TEST_F(Render, HudShowsTextAndRecordingIndicator) {
   auto white = [](const uint8_t* p) { return p[0] > 200 && p[1] > 200 && p[2] > 200; };
   auto red = [](const uint8_t* p) { return p[0] > 180 && p[1] < 90 && p[2] < 90; };
   const std::string args = "--shm " + shm_ + " --screenshot " + png_ + " --frames 2 --size 960x540";
-  ASSERT_EQ(run(args), 0);
+  ASSERT_EQ(run_viewer(args), 0);
   const RgbImage with = read_png(png_);
-  ASSERT_EQ(run(args + " --no-hud"), 0);
+  ASSERT_EQ(run_viewer(args + " --no-hud"), 0);
   const RgbImage without = read_png(png_);
   EXPECT_GT(count(with, 0, 0, 400, 40, white), 100) << "title and frame rate";
   EXPECT_EQ(count(without, 0, 0, 400, 40, white), 0);
@@ -203,9 +202,9 @@ TEST_F(Render, HudFitsASmallWindowWithALongSensorName) {
   const std::string args = "--shm " + shm_ + " --screenshot " + png_ +
                            " --frames 2 --no-labels --size " + std::to_string(w) + "x" +
                            std::to_string(h);
-  ASSERT_EQ(run(args), 0);
+  ASSERT_EQ(run_viewer(args), 0);
   const RgbImage hud = read_png(png_);
-  ASSERT_EQ(run(args + " --no-hud"), 0);
+  ASSERT_EQ(run_viewer(args + " --no-hud"), 0);
   const RgbImage plain = read_png(png_);
   auto green = [](const uint8_t* p) { return p[1] > 170 && p[0] < 130 && p[2] < 140; };
   int table = 0;
@@ -223,9 +222,9 @@ TEST_F(Render, HudFitsASmallWindowWithALongSensorName) {
 
 TEST_F(Render, SyntheticCrowdStandsOnItsGrid) {
   const int n = 16, frames = 3;
-  ASSERT_EQ(run("--source synthetic --avatars 16 --screenshot " + png_ + " --frames 3 --size " +
-                std::to_string(kW) + "x" + std::to_string(kH) +
-                " --no-hud --no-labels --no-earth-axes --no-shadows"),
+  ASSERT_EQ(run_viewer("--source synthetic --avatars 16 --screenshot " + png_ +
+                       " --frames 3 --size " + std::to_string(kW) + "x" + std::to_string(kH) +
+                       " --no-hud --no-labels --no-earth-axes --no-shadows"),
             0);
   const RgbImage img = read_png(png_);
   const OrbitCamera cam = OrbitCamera::framing(n);
@@ -255,10 +254,10 @@ TEST_F(Render, BvhPlaybackShowsTheFilesPose) {
       w.write_frame(f);
     }
   }
-  ASSERT_EQ(
-      run("--play " + bvh + " --screenshot " + png_ + " --frames 3 --size " + std::to_string(kW) +
-          "x" + std::to_string(kH) + " --no-hud --no-labels --no-earth-axes --no-shadows"),
-      0);
+  ASSERT_EQ(run_viewer("--play " + bvh + " --screenshot " + png_ + " --frames 3 --size " +
+                       std::to_string(kW) + "x" + std::to_string(kH) +
+                       " --no-hud --no-labels --no-earth-axes --no-shadows"),
+            0);
   const RgbImage img = read_png(png_);
   const BvhMotion motion(load_bvh(bvh));
   PoseFrame f;
@@ -303,10 +302,10 @@ TEST_F(Render, SessionPlaybackShowsTheRecordedPose) {
     }
     ASSERT_TRUE(w->close());
   }
-  ASSERT_EQ(
-      run("--play " + path + " --screenshot " + png_ + " --frames 3 --size " + std::to_string(kW) +
-          "x" + std::to_string(kH) + " --no-hud --no-labels --no-earth-axes --no-shadows"),
-      0);
+  ASSERT_EQ(run_viewer("--play " + path + " --screenshot " + png_ + " --frames 3 --size " +
+                       std::to_string(kW) + "x" + std::to_string(kH) +
+                       " --no-hud --no-labels --no-earth-axes --no-shadows"),
+            0);
   std::remove(path.c_str());
   const RgbImage img = read_png(png_);
   OrbitCamera cam = OrbitCamera::framing(1);  // --play follows the pelvis
@@ -329,13 +328,14 @@ TEST_F(Render, SessionPlaybackShowsTheRecordedPose) {
 }
 
 TEST_F(Render, MissingDaemonAndBadOptionsAreReported) {
-  EXPECT_EQ(run("--shm /mocap-viewer-nobody-here --wait 0.3 --screenshot " + png_ + " --frames 1"),
-            3);
-  EXPECT_EQ(run("--connect localhost --screenshot " + png_), 1) << "no port";
-  EXPECT_EQ(run("--avatars 0 --screenshot " + png_), 2);
-  EXPECT_EQ(run("--size 12xfoo --screenshot " + png_), 2);
-  EXPECT_EQ(run("--play /nonexistent.bvh --screenshot " + png_), 1);
-  EXPECT_EQ(run("--play /nonexistent.session --screenshot " + png_), 1);
+  EXPECT_EQ(
+      run_viewer("--shm /mocap-viewer-nobody-here --wait 0.3 --screenshot " + png_ + " --frames 1"),
+      3);
+  EXPECT_EQ(run_viewer("--connect localhost --screenshot " + png_), 1) << "no port";
+  EXPECT_EQ(run_viewer("--avatars 0 --screenshot " + png_), 2);
+  EXPECT_EQ(run_viewer("--size 12xfoo --screenshot " + png_), 2);
+  EXPECT_EQ(run_viewer("--play /nonexistent.bvh --screenshot " + png_), 1);
+  EXPECT_EQ(run_viewer("--play /nonexistent.session --screenshot " + png_), 1);
 }
 
 // --screenshot without any display server: EGL on Mesa's surfaceless platform.
