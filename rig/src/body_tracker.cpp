@@ -216,9 +216,13 @@ void BodyTracker::finish_calibration() {
   start_heading_from_motion();
   if (mounting_motion_next_ && captured.capture.pose == CalibrationPose::npose)
     mounting_.start(captured.capture, captured.capture.t_end_ns, opt_.mounting_motion_s);
-  // The hinges are straight in the pose: their angles count from here; the holds start over.
+  // The hinges are straight in the pose: their angles count from here, their axes were
+  // horizontal (both segments hang vertical); the holds start over.
+  const PoseCapture& c = captured.capture;
   for (Hinge& h : hinges_) {
-    h.axis.reset(captured.capture.pose == CalibrationPose::npose ? captured.capture.t_end_ns : 0);
+    h.axis.reset(c.pose == CalibrationPose::npose ? c.t_end_ns : 0);
+    if (c.pose == CalibrationPose::npose && c.have[h.upper] && c.have[h.lower])
+      h.axis.set_pose_up(c.up_sensor(h.upper), c.up_sensor(h.lower));
     h.heading.reset();
   }
   for (RangeJoint& r : ranges_)

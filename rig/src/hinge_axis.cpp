@@ -47,6 +47,7 @@ void HingeAxisEstimator::reset(int64_t t_ns) {
   i1_.setZero();
   i2_.setZero();
   normal_.setZero();
+  prior_.setZero();
   d_rad_ = 0;
   relative_sign_known_ = false;
   sum_.setZero();
@@ -55,6 +56,14 @@ void HingeAxisEstimator::reset(int64_t t_ns) {
   j1_ = j2_ = Eigen::Vector3d::UnitY();
   sigma_deg_ = 180;
   sign_agreement_ = 0;
+}
+
+void HingeAxisEstimator::set_pose_up(const Eigen::Vector3d& up1, const Eigen::Vector3d& up2) {
+  prior_.setZero();
+  if (!(up1.norm() > 0.5 && up2.norm() > 0.5)) return;  // (NaN fails too)
+  const Eigen::Vector3d u1 = up1.normalized(), u2 = up2.normalized();
+  prior_.block<3, 3>(0, 0) = kPriorSamples * u1 * u1.transpose();
+  prior_.block<3, 3>(3, 3) = kPriorSamples * u2 * u2.transpose();
 }
 
 void HingeAxisEstimator::add(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2,
@@ -119,7 +128,7 @@ void HingeAxisEstimator::solve() {
   if (cov.block<3, 3>(0, 0).trace() < kMinEvidence * 0.5 ||
       cov.block<3, 3>(3, 3).trace() < kMinEvidence * 0.5)
     return;
-  const Eigen::Matrix<double, 6, 6> whole = normal_ + horizontal_rows();
+  const Eigen::Matrix<double, 6, 6> whole = normal_ + horizontal_rows() + prior_;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(whole);
   const Eigen::Matrix<double, 6, 1> x = es.eigenvectors().col(0);
   const double n1 = x.head<3>().norm(), n2 = x.tail<3>().norm();

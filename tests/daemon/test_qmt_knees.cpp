@@ -75,14 +75,16 @@ TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
   const double left = std::sqrt(sum2[0] / n), right = std::sqrt(sum2[1] / n);
   RecordProperty("knee_l_off_axis_deg", std::to_string(left));
   RecordProperty("knee_r_off_axis_deg", std::to_string(right));
-  // Measured 8.9 / 10.0 deg (9.9 / 11.6 with the knees' heading held at 10 s rather than 2 s;
+  // Measured 9.1 / 9.4 deg (8.7-9.2 / 9.4-10.6 over calibrations at 1-3.5 s; 8.9 / 10.0, and
+  // 8.8-11.5 / 10.0-10.8 over those moments, before the axis fit's pose prior;
+  // 9.9 / 11.6 with the knees' heading held at 10 s rather than 2 s;
   // 10.4 / 11.9 with the relative heading of the axis fit's rows
   // followed rather than fitted per window; 15.0 / 21.5 before the knees' relative heading was
   // held to the hinge and their axes fitted with it; 36.5 / 40.1 at the start of issue 28's
   // work, where the straps were taken to be on our standard sites; the goal of 8 is not met:
   // docs/accuracy.md).
   EXPECT_LT(left, 10.0);
-  EXPECT_LT(right, 11.0);
+  EXPECT_LT(right, 10.5);
   for (int s = 0; s < kSegmentCount; ++s)
     EXPECT_LE(big_turns[s], 1) << kSegmentNames[s];
 }

@@ -28,6 +28,17 @@
 // the elevation rows alone (the horizontal ones were taken with the d of the sign at the time
 // and would keep a wrong one).
 //
+// The pose prior. In the N-pose both segments hang vertical and the hinge is straight, so its
+// axis is horizontal there (a real knee's within a few degrees): u1.j1 = 0 and u2.j2 = 0 with
+// the capture's up axes, added to every solve with the weight of kPriorSamples samples. The
+// elevation rows alone leave one direction nearly open while the two segments tilt together
+// with little flexion (tilting both axes towards their up axes by the same angle keeps
+// u1.j1 = u2.j2): on the real run the first answer's axes were 30-35 deg above the horizontal
+// or 5-7 below depending on the moment of the calibration (1.5 or 2 s into the still start),
+// and 120 s of forgetting kept that for a minute; the real knees scored 8.8-11.5 / 10.0-10.8
+// deg over calibrations at 1-3.5 s. With the prior 8.7-9.2 / 9.4-10.6 (10-1000 samples all
+// alike; CMU 6D unchanged).
+//
 // Signs. The fit leaves the axes' signs open (both flipped together fit as well, and one
 // flipped alone does too while the axis stays level). The rates integrated since the
 // calibration pose (straight knee and elbow) give the joint angle for any pair of signs,
@@ -53,6 +64,8 @@ class HingeAxisEstimator {
   static constexpr double kWindowS = 5.0;
   /// Before a first answer: this much tilt evidence (sum of |u - u_mean|^2 over samples).
   static constexpr double kMinEvidence = 20.0;
+  /// The pose prior's weight, in samples (2 s of motion's rows).
+  static constexpr double kPriorSamples = 100.0;
   static constexpr double kOvershootDeg = 15.0;
   static constexpr double kMaxFlexDeg = 165.0;
 
@@ -61,6 +74,9 @@ class HingeAxisEstimator {
 
   /// Starts over from a calibration pose (the joint straight at t_ns); 0: stops.
   void reset(int64_t t_ns);
+  /// After reset: the pose had both segments vertical, their up axes up1, up2 (unit, each
+  /// sensor's frame): the axis was horizontal in it (the pose prior above).
+  void set_pose_up(const Eigen::Vector3d& up1, const Eigen::Vector3d& up2);
   /// The upper (1) and lower (2) segments' sensors: orientation (any heading frame) and
   /// bias-free rate (own frame), at sample time t_ns.
   void add(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2,
@@ -98,6 +114,8 @@ class HingeAxisEstimator {
   int64_t t0_ns_ = 0, t_prev_ns_ = 0, t_entry_ns_ = 0, t_solve_ns_ = 0;
   Eigen::Vector3d i1_ = Eigen::Vector3d::Zero(), i2_ = Eigen::Vector3d::Zero();
   Eigen::Matrix<double, 6, 6> normal_ = Eigen::Matrix<double, 6, 6>::Zero();
+  /// The pose prior's rows (zero without one).
+  Eigen::Matrix<double, 6, 6> prior_ = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> sum_ = Eigen::Matrix<double, 6, 1>::Zero();
   /// The horizontal rows of one kWindowS window, kept so that any relative heading d can be
   /// put in at a solve: with r the rows x, y of each sample's rotation matrix (R1, R2),
