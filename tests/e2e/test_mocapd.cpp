@@ -58,6 +58,25 @@ int run(const std::vector<std::string>& argv, std::string* out = nullptr) {
   return rc;
 }
 
+/// The daemon's newest frame number (status), -1 when it does not answer.
+int64_t frame_number(const std::string& sock) {
+  try {
+    return nlohmann::json::parse(mocap::daemon::control_call(sock, "status"))["frame"]
+        .get<int64_t>();
+  } catch (const std::exception&) {
+    return -1;
+  }
+}
+
+/// Waits until the daemon has published `frames` more frames (at most 30 s): a recording's
+/// length in frames, not in wall time (a loaded machine publishes fewer per second).
+void wait_frames(const std::string& sock, int64_t frames) {
+  const int64_t from = frame_number(sock);
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (frame_number(sock) < from + frames && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(50ms);
+}
+
 uint16_t free_port() {
   return static_cast<uint16_t>(mocap::test::free_loopback_port(SOCK_STREAM));
 }
@@ -139,12 +158,13 @@ TEST(Mocapd, DemoControlStreamRecordReplay) {
   auto bad = nlohmann::json::parse(mocap::daemon::control_call(sock, std::string(9000, 'z')));
   EXPECT_FALSE(bad["ok"].get<bool>());
 
-  // Record 1.5 s, stop, record again and stop with SIGTERM.
+  // Record 150 frames (1.5 s at the demo's rate), stop, record again and stop with SIGTERM after
+  // 70 frames.
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "start", "a.mocapses"}), 0);
-  std::this_thread::sleep_for(1500ms);
+  wait_frames(sock, 150);
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "stop"}), 0);
   EXPECT_EQ(run({kBin + "mocapctl", "--socket", sock, "record", "start", "b.mocapses"}), 0);
-  std::this_thread::sleep_for(700ms);
+  wait_frames(sock, 70);
   kill(d, SIGTERM);
   EXPECT_EQ(wait_exit(d), 0) << slurp_file((dir / "mocapd.log.err").string());
   EXPECT_FALSE(fs::exists(sock));
