@@ -369,7 +369,8 @@ std::string Daemon::status_json() const {
                        {"sigma_deg", round_to(a.mounting_sigma_deg, 10)}};
       e["alignment_heading"] = {{"source", rig::to_string(a.heading_source)},
                                 {"sigma_deg", round_to(a.heading_sigma_deg, 10)},
-                                {"rejected_turns", a.rejected_turns}};
+                                {"rejected_turns", a.rejected_turns},
+                                {"corrected_turns", a.corrected_turns}};
     }
     add_telemetry(st.telemetry[i], e);
     sensors.push_back(e);

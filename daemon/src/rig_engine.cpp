@@ -121,6 +121,7 @@ CalibrationProgress RigEngine::calibration_progress() const {
     o.heading_source = g.heading_source;
     o.heading_sigma_deg = static_cast<float>(g.heading_sigma_deg);
     o.rejected_turns = g.rejected_turns;
+    o.corrected_turns = g.corrected_turns;
   }
   return p;
 }

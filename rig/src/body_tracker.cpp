@@ -210,6 +210,7 @@ void BodyTracker::finish_calibration() {
   if (!result_->ok()) return;
   npose_.reset();
   align_ = next;
+  turn_guard_.reset();
   for (LocalFieldWatch& w : field_watch_)
     w = LocalFieldWatch{};
   suspect_local_fields(*result_);
@@ -303,15 +304,15 @@ void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing)
   for (int s = 0; s < kSegmentCount; ++s) {
     const SegmentAlignment& a = align_.segment(s);
     if (!facing[s].known() || !a.aligned) continue;
-    // A running estimate's update far off the facing it found (the hinge's signs chosen the
-    // other way in a stretch of odd motion) is refused, not followed: a segment never flips.
-    if (a.facing.source == facing[s].source &&
-        std::abs(wrap_angle_rad(facing[s].yaw_rad - a.facing.yaw_rad)) >
-            Alignment::kImplausibleTurnDeg * kRadPerDeg) {
+    // A running estimate's answer far off the facing it found is refused, not followed (a
+    // segment never flips), unless it corrects a wrong first answer (turn_guard.hpp).
+    const TurnGuard::Verdict v = turn_guard_.judge(s, a.facing, facing[s]);
+    if (v == TurnGuard::Verdict::refuse) {
       align_.reject_turn(s);
       continue;
     }
-    if (replaces(a.facing, facing[s])) {
+    if (v == TurnGuard::Verdict::correct) align_.correct_turn(s);
+    if (v == TurnGuard::Verdict::correct || replaces(a.facing, facing[s])) {
       const bool was_known = a.facing.known();
       align_.set_facing(s, facing[s]);
       heading_.stop(s);  // its heading follows the facing now, not a fit
@@ -349,6 +350,7 @@ void BodyTracker::solve(int64_t t_ns, PoseFrame& out) {
 
 void BodyTracker::set_calibration(const Calibration& c) {
   align_.load(c);
+  turn_guard_.reset();
   publish_alignment();
 }
 

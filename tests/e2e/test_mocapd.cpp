@@ -337,6 +337,7 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
     EXPECT_NE(s["mounting"]["source"].get<std::string>(), "none") << s.dump();
     EXPECT_LT(s["mounting"]["sigma_deg"].get<double>(), 90) << s.dump();
     EXPECT_TRUE(s["alignment_heading"].contains("rejected_turns")) << s.dump();
+    EXPECT_TRUE(s["alignment_heading"].contains("corrected_turns")) << s.dump();
   }
   // A mounting calibration is taken and says what to do.
   {

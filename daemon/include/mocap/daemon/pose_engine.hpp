@@ -25,7 +25,8 @@ struct SegmentAlignmentStatus {
   rig::AlignSource mounting_source = rig::AlignSource::none;
   rig::AlignSource heading_source = rig::AlignSource::none;
   float mounting_sigma_deg = 180, heading_sigma_deg = 180;
-  uint32_t rejected_turns = 0;  ///< turns from motion refused as implausible
+  uint32_t rejected_turns = 0;   ///< turns from motion refused as implausible
+  uint32_t corrected_turns = 0;  ///< far turns accepted as a wrong first facing's correction
 };
 
 /// How far the calibration has got (for the status): the last capture's outcome, whether the

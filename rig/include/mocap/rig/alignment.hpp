@@ -46,6 +46,8 @@ struct SegmentAlignment {
   double heading_sigma_deg = 180;  ///< of the segment's heading relative to the body's
   /// Turns from motion refused as implausible (a found heading is never turned over).
   uint32_t rejected_turns = 0;
+  /// Far turns accepted as the correction of a wrong first facing (turn_guard.hpp).
+  uint32_t corrected_turns = 0;
 };
 
 class Alignment {
@@ -88,6 +90,11 @@ class Alignment {
   /// A turn of segment s from motion was refused as implausible (counted, reported).
   void reject_turn(int s) {
     if (s >= 0 && s < kSegmentCount) ++seg_[static_cast<size_t>(s)].rejected_turns;
+  }
+  /// A far turn of segment s corrected a wrong first facing (counted, reported; the facing
+  /// itself changes through set_facing).
+  void correct_turn(int s) {
+    if (s >= 0 && s < kSegmentCount) ++seg_[static_cast<size_t>(s)].corrected_turns;
   }
   /// Heading reset (the person stands facing forward): every segment in `have` takes the
   /// pelvis's earth yaw (its twist about the vertical; the circular mean without a pelvis

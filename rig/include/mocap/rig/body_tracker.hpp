@@ -46,6 +46,7 @@
 #include "mocap/rig/mounting_motion.hpp"
 #include "mocap/rig/pose_capture.hpp"
 #include "mocap/rig/range_heading.hpp"
+#include "mocap/rig/turn_guard.hpp"
 #include "mocap/rig/sensor_health.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
@@ -222,6 +223,8 @@ class BodyTracker {
   /// its lower segment's sensor (orientation q, dt_s since its previous sample).
   void hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s, int64_t t_ns);
   std::array<Hinge, 2> hinges_;
+  /// The running estimates' far answers: refused, or a wrong first answer corrected.
+  TurnGuard turn_guard_;
   /// Per hip: its thigh and the hold of the thigh's heading to the hip's range.
   struct RangeJoint {
     int child;
