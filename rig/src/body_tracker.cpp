@@ -170,9 +170,10 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   // 5. Mounting from motion: the mounting motion's window, the knees' axes.
   if (mounting_.active()) {
     mounting_.add(seg, q, s.t_host_ns);
-    if (mounting_.done(s.t_host_ns)) apply_facings(mounting_.finish());
+    if (mounting_.done(s.t_host_ns)) apply_facings(mounting_.finish(), false);
   }
   if (s.has(kFieldGyr)) w_rad_s_[k] = s.gyr_rad_s - o.gyro_bias_rad_s;
+  slew_facing(seg, dt_s);
   const RigMapping& rig = skeleton_.rig();
   for (Hinge& h : hinges_) {
     if (h.lower != seg || !rig.tracked(h.upper) || !s.has(kFieldGyr)) continue;
@@ -211,6 +212,7 @@ void BodyTracker::finish_calibration() {
   npose_.reset();
   align_ = next;
   turn_guard_.reset();
+  facing_target_ = {};
   for (LocalFieldWatch& w : field_watch_)
     w = LocalFieldWatch{};
   suspect_local_fields(*result_);
@@ -254,7 +256,7 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
     f[s] =
         facing_from_axis(c, s, forward, std::hypot(kModelSigmaDeg, sigma), AlignSource::hinge_axis);
   }
-  apply_facings(f);
+  apply_facings(f, true);
 }
 
 void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s,
@@ -298,7 +300,26 @@ void BodyTracker::hold_range_heading(RangeJoint& r, const Eigen::Quaterniond& q,
   if (yaw != 0) align_.turn_heading(r.child, yaw, AlignSource::joint, ac.heading_sigma_deg);
 }
 
-void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing) {
+const Facing& BodyTracker::held_facing(int s) const {
+  const Facing& target = facing_target_[static_cast<size_t>(s)];
+  return target.known() ? target : align_.segment(s).facing;
+}
+
+void BodyTracker::slew_facing(int s, double dt_s) {
+  Facing& target = facing_target_[static_cast<size_t>(s)];
+  if (!target.known()) return;
+  const double held_rad = align_.segment(s).facing.yaw_rad;
+  const double left_rad = wrap_angle_rad(target.yaw_rad - held_rad);
+  const double step_rad = kFacingSlewDegS * kRadPerDeg * std::clamp(dt_s, 0.0, 0.1);
+  Facing next = target;
+  if (std::abs(left_rad) > step_rad)
+    next.yaw_rad = held_rad + std::copysign(step_rad, left_rad);
+  else
+    target = Facing{};
+  align_.set_facing(s, next);
+}
+
+void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing, bool slew) {
   std::array<bool, kSegmentCount> shared{};
   AlignSource source = AlignSource::none;
   for (int s = 0; s < kSegmentCount; ++s) {
@@ -306,15 +327,21 @@ void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing)
     if (!facing[s].known() || !a.aligned) continue;
     // A running estimate's answer far off the facing it found is refused, not followed (a
     // segment never flips), unless it corrects a wrong first answer (turn_guard.hpp).
-    const TurnGuard::Verdict v = turn_guard_.judge(s, a.facing, facing[s]);
+    const Facing& held = held_facing(s);
+    const TurnGuard::Verdict v = turn_guard_.judge(s, held, facing[s]);
     if (v == TurnGuard::Verdict::refuse) {
       align_.reject_turn(s);
       continue;
     }
     if (v == TurnGuard::Verdict::correct) align_.correct_turn(s);
-    if (v == TurnGuard::Verdict::correct || replaces(a.facing, facing[s])) {
+    if (v == TurnGuard::Verdict::correct || replaces(held, facing[s])) {
       const bool was_known = a.facing.known();
-      align_.set_facing(s, facing[s]);
+      if (slew && was_known && a.own_frame) {
+        facing_target_[static_cast<size_t>(s)] = facing[s];
+      } else {
+        facing_target_[static_cast<size_t>(s)] = Facing{};
+        align_.set_facing(s, facing[s]);
+      }
       heading_.stop(s);  // its heading follows the facing now, not a fit
       refine_[s] = false;
       if (!was_known) refit_against(s);
@@ -351,6 +378,7 @@ void BodyTracker::solve(int64_t t_ns, PoseFrame& out) {
 void BodyTracker::set_calibration(const Calibration& c) {
   align_.load(c);
   turn_guard_.reset();
+  facing_target_ = {};
   publish_alignment();
 }
 

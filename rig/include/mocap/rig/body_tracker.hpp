@@ -10,7 +10,8 @@
 //      (calibrate.hpp) into the segments' alignment,
 //   5. mounting from motion: the mounting motion's window after an N-pose (mounting_motion.hpp)
 //      and the knees' hinge axes from any motion (hinge_axis.hpp), each giving facings that
-//      replace assumed ones (facing.hpp: replaces); a segment that gets its facing becomes the
+//      replace assumed ones (facing.hpp: replaces; one found while tracking turns its segment
+//      at most kFacingSlewDegS, never in one frame); a segment that gets its facing becomes the
 //      reference of the fits below it. Not the elbows: a forearm sensor turns with pronation
 //      (the forearm segment carries it, skeleton.md), so its axis is not fixed in that sensor's
 //      frame; fitted as a hinge it turned the arms 30-140 deg off in 6D after an N-pose alone
@@ -46,8 +47,8 @@
 #include "mocap/rig/mounting_motion.hpp"
 #include "mocap/rig/pose_capture.hpp"
 #include "mocap/rig/range_heading.hpp"
-#include "mocap/rig/turn_guard.hpp"
 #include "mocap/rig/sensor_health.hpp"
+#include "mocap/rig/turn_guard.hpp"
 #include "mocap/skeleton/skeleton.hpp"
 
 namespace mocap::rig {
@@ -208,8 +209,20 @@ class BodyTracker {
   /// start over against the nearest known one above them.
   void refit_against(int s);
   /// Facings found from motion: each replaces a held one where replaces() says so; those of
-  /// sensors sharing the earth frame vote on the body heading.
-  void apply_facings(const std::array<Facing, kSegmentCount>& facing);
+  /// sensors sharing the earth frame vote on the body heading. slew: found while tracking, an
+  /// own-frame segment turns onto it at kFacingSlewDegS (slew_facing) instead of at once.
+  void apply_facings(const std::array<Facing, kSegmentCount>& facing, bool slew);
+  /// A facing found while tracking turns the segment at most this fast: a first hinge answer
+  /// 60-80 deg off the site prior turned the real run's thighs 78 deg in one frame (a flip to
+  /// the eye). Slower costs the knees while it turns (real run 9.1 / 9.4 deg applied at once,
+  /// 9.2 / 9.5 at 360 deg/s, 9.3 / 9.7 at 180, 9.6 / 9.9 at 90; CMU 6D unchanged).
+  static constexpr double kFacingSlewDegS = 360.0;
+  /// Per segment: the facing it is turning onto (unknown: none), and its held facing as the
+  /// estimates see it (that target, else the alignment's).
+  std::array<Facing, kSegmentCount> facing_target_{};
+  const Facing& held_facing(int s) const;
+  /// Step 5: segment s turns towards its facing target by at most kFacingSlewDegS * dt_s.
+  void slew_facing(int s, double dt_s);
   /// A hinge's axes: the facings of its two segments.
   struct Hinge;
   void apply_hinge_axes(Hinge& h);
