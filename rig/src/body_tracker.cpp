@@ -173,7 +173,7 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
     if (mounting_.done(s.t_host_ns)) apply_facings(mounting_.finish(), false);
   }
   if (s.has(kFieldGyr)) w_rad_s_[k] = s.gyr_rad_s - o.gyro_bias_rad_s;
-  slew_facing(seg, dt_s);
+  align_.step_facing(seg, kFacingSlewDegS * kRadPerDeg * std::clamp(dt_s, 0.0, 0.1));
   const RigMapping& rig = skeleton_.rig();
   for (Hinge& h : hinges_) {
     if (h.lower != seg || !rig.tracked(h.upper) || !s.has(kFieldGyr)) continue;
@@ -212,7 +212,6 @@ void BodyTracker::finish_calibration() {
   npose_.reset();
   align_ = next;
   turn_guard_.reset();
-  facing_target_ = {};
   for (LocalFieldWatch& w : field_watch_)
     w = LocalFieldWatch{};
   suspect_local_fields(*result_);
@@ -300,25 +299,6 @@ void BodyTracker::hold_range_heading(RangeJoint& r, const Eigen::Quaterniond& q,
   if (yaw != 0) align_.turn_heading(r.child, yaw, AlignSource::joint, ac.heading_sigma_deg);
 }
 
-const Facing& BodyTracker::held_facing(int s) const {
-  const Facing& target = facing_target_[static_cast<size_t>(s)];
-  return target.known() ? target : align_.segment(s).facing;
-}
-
-void BodyTracker::slew_facing(int s, double dt_s) {
-  Facing& target = facing_target_[static_cast<size_t>(s)];
-  if (!target.known()) return;
-  const double held_rad = align_.segment(s).facing.yaw_rad;
-  const double left_rad = wrap_angle_rad(target.yaw_rad - held_rad);
-  const double step_rad = kFacingSlewDegS * kRadPerDeg * std::clamp(dt_s, 0.0, 0.1);
-  Facing next = target;
-  if (std::abs(left_rad) > step_rad)
-    next.yaw_rad = held_rad + std::copysign(step_rad, left_rad);
-  else
-    target = Facing{};
-  align_.set_facing(s, next);
-}
-
 void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing, bool slew) {
   std::array<bool, kSegmentCount> shared{};
   AlignSource source = AlignSource::none;
@@ -327,7 +307,7 @@ void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing,
     if (!facing[s].known() || !a.aligned) continue;
     // A running estimate's answer far off the facing it found is refused, not followed (a
     // segment never flips), unless it corrects a wrong first answer (turn_guard.hpp).
-    const Facing& held = held_facing(s);
+    const Facing& held = align_.held_facing(s);
     const TurnGuard::Verdict v = turn_guard_.judge(s, held, facing[s]);
     if (v == TurnGuard::Verdict::refuse) {
       align_.reject_turn(s);
@@ -336,12 +316,10 @@ void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing,
     if (v == TurnGuard::Verdict::correct) align_.correct_turn(s);
     if (v == TurnGuard::Verdict::correct || replaces(held, facing[s])) {
       const bool was_known = a.facing.known();
-      if (slew && was_known && a.own_frame) {
-        facing_target_[static_cast<size_t>(s)] = facing[s];
-      } else {
-        facing_target_[static_cast<size_t>(s)] = Facing{};
+      if (slew && was_known && a.own_frame)
+        align_.turn_facing_towards(s, facing[s]);
+      else
         align_.set_facing(s, facing[s]);
-      }
       heading_.stop(s);  // its heading follows the facing now, not a fit
       refine_[s] = false;
       if (!was_known) refit_against(s);
@@ -378,7 +356,6 @@ void BodyTracker::solve(int64_t t_ns, PoseFrame& out) {
 void BodyTracker::set_calibration(const Calibration& c) {
   align_.load(c);
   turn_guard_.reset();
-  facing_target_ = {};
   publish_alignment();
 }
 

@@ -210,19 +210,14 @@ class BodyTracker {
   void refit_against(int s);
   /// Facings found from motion: each replaces a held one where replaces() says so; those of
   /// sensors sharing the earth frame vote on the body heading. slew: found while tracking, an
-  /// own-frame segment turns onto it at kFacingSlewDegS (slew_facing) instead of at once.
+  /// own-frame segment turns onto it at kFacingSlewDegS (Alignment::step_facing, step 5)
+  /// instead of at once.
   void apply_facings(const std::array<Facing, kSegmentCount>& facing, bool slew);
   /// A facing found while tracking turns the segment at most this fast: a first hinge answer
   /// 60-80 deg off the site prior turned the real run's thighs 78 deg in one frame (a flip to
   /// the eye). Slower costs the knees while it turns (real run 9.1 / 9.4 deg applied at once,
   /// 9.2 / 9.5 at 360 deg/s, 9.3 / 9.7 at 180, 9.6 / 9.9 at 90; CMU 6D unchanged).
   static constexpr double kFacingSlewDegS = 360.0;
-  /// Per segment: the facing it is turning onto (unknown: none), and its held facing as the
-  /// estimates see it (that target, else the alignment's).
-  std::array<Facing, kSegmentCount> facing_target_{};
-  const Facing& held_facing(int s) const;
-  /// Step 5: segment s turns towards its facing target by at most kFacingSlewDegS * dt_s.
-  void slew_facing(int s, double dt_s);
   /// A hinge's axes: the facings of its two segments.
   struct Hinge;
   void apply_hinge_axes(Hinge& h);
