@@ -73,6 +73,10 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
     j["alone_segment_deg"] = a;
     j["worst_segment_excess_deg"] = worst;
     j["worst_segment_excess_same_g_deg"] = worst_same_g;
+    double jump = 0;
+    for (int s = 0; s < kSegmentCount; ++s)
+      jump = std::max(jump, r.max_jump_deg[s]);
+    j["max_jump_deg"] = jump;
   }
   nlohmann::json diag;
   for (int s = 0; s < kSegmentCount; ++s) {

@@ -103,28 +103,6 @@ void Alignment::load(const Calibration& c) {
 }
 
 double Alignment::set_facing(int s, const Facing& f) {
-  if (s >= 0 && s < kSegmentCount) seg_[s].facing_target = Facing{};
-  return apply_facing(s, f);
-}
-
-void Alignment::turn_facing_towards(int s, const Facing& f) {
-  if (s < 0 || s >= kSegmentCount || !f.known() || !std::isfinite(f.yaw_rad)) return;
-  seg_[s].facing_target = f;
-}
-
-void Alignment::step_facing(int s, double max_rad) {
-  if (s < 0 || s >= kSegmentCount || !seg_[s].facing_target.known()) return;
-  SegmentAlignment& a = seg_[s];
-  Facing next = a.facing_target;
-  const double left_rad = wrap_angle_rad(next.yaw_rad - a.facing.yaw_rad);
-  if (std::abs(left_rad) > max_rad)
-    next.yaw_rad = a.facing.yaw_rad + std::copysign(max_rad, left_rad);
-  else
-    a.facing_target = Facing{};
-  apply_facing(s, next);
-}
-
-double Alignment::apply_facing(int s, const Facing& f) {
   if (s < 0 || s >= kSegmentCount || !f.known() || !std::isfinite(f.yaw_rad)) return 0;
   SegmentAlignment& a = seg_[s];
   if (!a.aligned || !have_capture_) return 0;

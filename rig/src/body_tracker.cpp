@@ -157,8 +157,10 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   LocalFieldWatch& watch = field_watch_[k];
   if (watch.holding()) {
     double turned_rad = 0;
-    if (s.has(kFieldMag) && watch.on_field(o, dt_s, turned_rad))
+    if (s.has(kFieldMag) && watch.on_field(o, dt_s, turned_rad)) {
       align_.turn_mounting(seg, turned_rad, AlignSource::local_field);
+      snap_alignment_ = true;  // the held heading turns with it in this sample: not eased
+    }
     watch.on_sample(o, dt_s);
   }
   const Eigen::Quaterniond q = q_earth_sensor(i, o);
@@ -173,7 +175,6 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
     if (mounting_.done(s.t_host_ns)) apply_facings(mounting_.finish(), false);
   }
   if (s.has(kFieldGyr)) w_rad_s_[k] = s.gyr_rad_s - o.gyro_bias_rad_s;
-  align_.step_facing(seg, kFacingSlewDegS * kRadPerDeg * std::clamp(dt_s, 0.0, 0.1));
   const RigMapping& rig = skeleton_.rig();
   for (Hinge& h : hinges_) {
     if (h.lower != seg || !rig.tracked(h.upper) || !s.has(kFieldGyr)) continue;
@@ -197,7 +198,10 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
 void BodyTracker::publish_alignment() {
   if (align_.revision() == align_revision_seen_) return;
   align_revision_seen_ = align_.revision();
-  skeleton_.set_calibration(align_.calibration());
+  // A new calibration (or a heading reset) applies at once; an alignment found while tracking
+  // is eased into the published pose (skeleton.hpp).
+  skeleton_.set_calibration(align_.calibration(), !snap_alignment_);
+  snap_alignment_ = false;
 }
 
 void BodyTracker::finish_calibration() {
@@ -211,6 +215,7 @@ void BodyTracker::finish_calibration() {
   if (!result_->ok()) return;
   npose_.reset();
   align_ = next;
+  snap_alignment_ = true;
   turn_guard_.reset();
   for (LocalFieldWatch& w : field_watch_)
     w = LocalFieldWatch{};
@@ -299,7 +304,8 @@ void BodyTracker::hold_range_heading(RangeJoint& r, const Eigen::Quaterniond& q,
   if (yaw != 0) align_.turn_heading(r.child, yaw, AlignSource::joint, ac.heading_sigma_deg);
 }
 
-void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing, bool slew) {
+void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing, bool ease) {
+  if (!ease) snap_alignment_ = true;
   std::array<bool, kSegmentCount> shared{};
   AlignSource source = AlignSource::none;
   for (int s = 0; s < kSegmentCount; ++s) {
@@ -307,7 +313,7 @@ void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing,
     if (!facing[s].known() || !a.aligned) continue;
     // A running estimate's answer far off the facing it found is refused, not followed (a
     // segment never flips), unless it corrects a wrong first answer (turn_guard.hpp).
-    const Facing& held = align_.held_facing(s);
+    const Facing& held = a.facing;
     const TurnGuard::Verdict v = turn_guard_.judge(s, held, facing[s]);
     if (v == TurnGuard::Verdict::refuse) {
       align_.reject_turn(s);
@@ -316,10 +322,7 @@ void BodyTracker::apply_facings(const std::array<Facing, kSegmentCount>& facing,
     if (v == TurnGuard::Verdict::correct) align_.correct_turn(s);
     if (v == TurnGuard::Verdict::correct || replaces(held, facing[s])) {
       const bool was_known = a.facing.known();
-      if (slew && was_known && a.own_frame)
-        align_.turn_facing_towards(s, facing[s]);
-      else
-        align_.set_facing(s, facing[s]);
+      align_.set_facing(s, facing[s]);
       heading_.stop(s);  // its heading follows the facing now, not a fit
       refine_[s] = false;
       if (!was_known) refit_against(s);
@@ -355,6 +358,7 @@ void BodyTracker::solve(int64_t t_ns, PoseFrame& out) {
 
 void BodyTracker::set_calibration(const Calibration& c) {
   align_.load(c);
+  snap_alignment_ = true;
   turn_guard_.reset();
   publish_alignment();
 }
@@ -367,6 +371,7 @@ void BodyTracker::reset_heading() {
     have[s] = skeleton_.sensor_live(s);
   }
   align_.reset_heading(q_es, have);
+  snap_alignment_ = true;
   publish_alignment();
 }
 

@@ -119,6 +119,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   // Filter heading error at the first evaluated frame, per sensor, and the running sums.
   std::array<double, Performer::kSensorCount> heading0_deg{}, heading_sq{}, incl_sq{},
       mag_disturbed{};
+  std::array<Eigen::Quaterniond, kSegmentCount> prev_est, prev_alone;  // the last evaluated frame
 
   for (int k = 1; k * frame_s <= end_s + 1e-9; ++k) {
     const int64_t t_ns = to_ns(k * frame_s);
@@ -166,6 +167,16 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
         q_alone[index(Performer::sensor_segment(id))] = alone_align[id] * alone_q(id);
       metric.add(skeleton.q_earth_segment(), q_true);
       alone_metric.add(q_alone, q_true);
+      for (int id = 0; id < Performer::kSensorCount; ++id) {
+        const int s = index(Performer::sensor_segment(id));
+        if (r.frames > 0) {
+          const double jump = angle_deg(skeleton.q_earth_segment()[s], prev_est[s]) -
+                              angle_deg(q_alone[s], prev_alone[s]);
+          r.max_jump_deg[s] = std::max(r.max_jump_deg[s], jump);
+        }
+        prev_est[s] = skeleton.q_earth_segment()[s];
+        prev_alone[s] = q_alone[s];
+      }
     }
     for (int s = 0; s < kSegmentCount; ++s) {
       const double e_seg = angle_deg(skeleton.q_earth_segment()[s], truth.q_earth_segment[s]);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mocap/core/units.hpp"
 #include "mocap/skeleton/quat_math.hpp"
 
 namespace mocap {
@@ -14,6 +15,7 @@ Skeleton::Skeleton(const BodyModel& model, const JointLimits& limits, RigMapping
     : model_(model), limits_(limits), rig_(rig), opt_(options), root_(model, options.root) {
   validate(limits_);
   q_es_.fill(Eigen::Quaterniond::Identity());
+  q_ease_.fill(Eigen::Quaterniond::Identity());
   q_earth_.fill(Eigen::Quaterniond::Identity());
   q_joint_.fill(Eigen::Quaterniond::Identity());
   p_earth_.fill(Eigen::Vector3d::Zero());
@@ -50,13 +52,38 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
   if (t_ns > t_newest_ns_) t_newest_ns_ = t_ns;
 }
 
-void Skeleton::set_calibration(const Calibration& c) {
+void Skeleton::set_calibration(const Calibration& c, bool ease) {
+  for (int i = 0; i < kSegmentCount; ++i) {
+    const bool eased = ease && calib_.valid && c.valid && calib_.calibrated[i] && c.calibrated[i] &&
+                       have_[i] && opt_.ease_deg_s > 0;
+    if (!eased) {
+      q_ease_[i].setIdentity();
+      continue;
+    }
+    // Published before: ease old; after: ease' new. Continuous where ease' = ease old new^-1.
+    const Eigen::Quaterniond e = q_ease_[i] * calib_.segment_from_sensor(i, q_es_[i]) *
+                                 c.segment_from_sensor(i, q_es_[i]).conjugate();
+    q_ease_[i] = e.coeffs().allFinite() ? e.normalized() : Eigen::Quaterniond::Identity();
+  }
   calib_ = c;
   ++calib_revision_;
 }
 
 void Skeleton::set_sensor_live(int segment, bool live) {
   if (segment >= 0 && segment < kSegmentCount) dead_[segment] = !live;
+}
+
+Eigen::Quaterniond Skeleton::ease_step(int i, double dt_s) {
+  Eigen::Quaterniond& e = q_ease_[i];
+  if (e.w() < 0) e.coeffs() = -e.coeffs();  // the short way
+  const double angle_rad = 2.0 * std::acos(std::min(1.0, e.w()));
+  const double step_rad = opt_.ease_deg_s * kRadPerDeg * dt_s;
+  if (!(angle_rad > step_rad)) {
+    e.setIdentity();
+  } else {
+    e = Eigen::Quaterniond::Identity().slerp(1.0 - step_rad / angle_rad, e).normalized();
+  }
+  return e;
 }
 
 double Skeleton::drift_signal_deg() const {
@@ -70,11 +97,14 @@ void Skeleton::solve(PoseFrame& out) {
 void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
   std::array<uint32_t, kSegmentCount> flags{};
   std::array<bool, kSegmentCount> live{};
-  // 1. Segments with a sensor that has reported.
+  const double dt_s =
+      frame_ == 0 ? 0.0 : std::max(0.0, static_cast<double>(t_now_ns - t_prev_solve_ns_) * 1e-9);
+  // 1. Segments with a sensor that has reported (an alignment change eased in).
   for (int i = 0; i < kSegmentCount; ++i) {
     if (!rig_.tracked(i) || !have_[i] || dead_[i]) continue;
     live[i] = true;
     q_earth_[i] = calib_.segment_from_sensor(i, q_es_[i]);
+    if (q_ease_[i].w() < 1.0) q_earth_[i] = (ease_step(i, dt_s) * q_earth_[i]).normalized();
     flags[i] = kSegTracked | in_flags_[i];
     if (t_now_ns - t_in_ns_[i] > opt_.stale_after_ns) flags[i] |= kSegStale;
   }
@@ -95,8 +125,6 @@ void Skeleton::solve(int64_t t_now_ns, PoseFrame& out) {
     }
   }
   // 3. Joint rotations and their limits (reported, never imposed).
-  const double dt_s =
-      frame_ == 0 ? 0.0 : std::max(0.0, static_cast<double>(t_now_ns - t_prev_solve_ns_) * 1e-9);
   const double alpha =
       opt_.violation_tau_s > 0 ? 1.0 - std::exp(-dt_s / opt_.violation_tau_s) : 1.0;
   for (int i = 0; i < kSegmentCount; ++i) {

@@ -81,7 +81,9 @@ TEST(RealMotion, SixDRigCalibratesFromTheSiteNormals) {
 // pronation): fitted as one it turned the arms 30-140 deg off (02_09 seed 1: right forearm
 // +61 deg). A knee's first solve from little flexion whose signs were not clearly chosen
 // turned the right thigh 180 deg, then held (03_03 seed 1: +60 deg). 24 clips x 3 seeds: mean
-// 1.41 -> 1.30 x the ideally aligned filters, worst excess 60.6 -> 11.6 deg.
+// 1.41 -> 1.30 x the ideally aligned filters, worst excess 60.6 -> 11.6 deg. No correction
+// turns a segment in one frame (the skeleton eases it in): largest turn beyond the filter
+// alone's between two frames 3.6 deg (03_03, 100 frames/s); applied at once 37.7.
 TEST(RealMotion, SixDAfterAnNPoseAloneKeepsEverySegment) {
   for (const char* name : {"02_09", "03_03"}) {
     AccuracyOptions o = after_moves(clip(name), 1);
@@ -89,10 +91,12 @@ TEST(RealMotion, SixDAfterAnNPoseAloneKeepsEverySegment) {
     o.mounting_motion = false;
     const AccuracyResult r = run_accuracy(o);
     ASSERT_TRUE(r.calibrated) << name << ": " << r.calibration_message;
-    for (int s = 0; s < kSegmentCount; ++s)
-      if (r.alone_segment_deg[s] > 0)
-        EXPECT_LE(r.metric_segment_deg[s], r.alone_segment_deg[s] + 8.0)
-            << name << " " << kSegmentNames[s];
+    for (int s = 0; s < kSegmentCount; ++s) {
+      if (r.alone_segment_deg[s] == 0) continue;
+      EXPECT_LE(r.metric_segment_deg[s], r.alone_segment_deg[s] + 8.0)
+          << name << " " << kSegmentNames[s];
+      EXPECT_LE(r.max_jump_deg[s], 10.0) << name << " " << kSegmentNames[s];
+    }
   }
 }
 
@@ -133,10 +137,12 @@ TEST(RealMotion, RandomlyStrappedSensorsAreFoundNotRefused) {
           continue;
         }
         EXPECT_LE(r.metric_mean_deg, 1.6 * r.alone_mean_deg) << what;
-        for (int s = 0; s < kSegmentCount; ++s)
-          if (r.alone_segment_deg[s] > 0)
-            EXPECT_LE(r.metric_segment_deg[s], r.alone_segment_deg[s] + 7.0)
-                << what << " " << kSegmentNames[s];
+        for (int s = 0; s < kSegmentCount; ++s) {
+          if (r.alone_segment_deg[s] == 0) continue;
+          EXPECT_LE(r.metric_segment_deg[s], r.alone_segment_deg[s] + 7.0)
+              << what << " " << kSegmentNames[s];
+          EXPECT_LE(r.max_jump_deg[s], 10.0) << what << " " << kSegmentNames[s];  // never snaps
+        }
       }
 }
 

@@ -3,7 +3,9 @@
 // output is deterministic.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "mocap/skeleton/skeleton.hpp"
 #include "skeleton_test_util.hpp"
@@ -163,6 +165,65 @@ TEST(Skeleton, SilentSensorIsInferredAndHeadingResetFacesTarget) {
   EXPECT_FALSE(sk.sensor_live(index(Segment::hand_r)));
   EXPECT_TRUE(sk.sensor_live(index(Segment::pelvis)));
   EXPECT_LT(angle_between_deg(sk.sensor_orientation(index(Segment::pelvis)), facing), 1e-12);
+}
+
+// An alignment found while tracking (set_calibration with ease) turns the published segment
+// onto it at ease_deg_s, never in one frame, from where it was; a new calibration applies at
+// once; a non-finite calibration never reaches the pose.
+TEST(Skeleton, AnAlignmentFoundWhileTrackingIsEasedInNeverInOneFrame) {
+  std::mt19937 rng(13);
+  const int thigh = index(Segment::thigh_l);
+  Calibration c;
+  c.valid = true;
+  for (int s = 0; s < kSegmentCount; ++s) {
+    c.calibrated[s] = true;
+    c.q_sensor_segment[s] = test::random_rotation(rng);
+  }
+  Calibration turned = c;  // the thigh's sensor frame found 150 deg off in heading
+  turned.q_correction[thigh] =
+      Eigen::Quaterniond(Eigen::AngleAxisd(150 * kRadPerDeg, Eigen::Vector3d::UnitZ()));
+  Skeleton sk(BodyModel{}, default_joint_limits(), RigMapping::full());
+  const double ease_deg_s = sk.options().ease_deg_s;
+  ASSERT_GT(ease_deg_s, 0);
+  sk.set_calibration(c);
+  const auto pose = test::random_pose(rng, 40);
+  PoseFrame f;
+  reset_pose(f);
+  auto solve_at = [&](int64_t t_ns) {
+    for (int s = 0; s < kSegmentCount; ++s)
+      sk.set_sensor_orientation(s, pose[s], t_ns);
+    sk.solve(t_ns, f);
+    return sk.q_earth_segment()[thigh];
+  };
+  const Eigen::Quaterniond before = solve_at(0);
+  const Eigen::Quaterniond target = turned.segment_from_sensor(thigh, pose[thigh]);
+  ASSERT_GT(angle_between_deg(before, target), 140);
+  sk.set_calibration(turned, /*ease=*/true);
+  Eigen::Quaterniond last = before;
+  int frames = 0;
+  for (int k = 1; k <= 100; ++k) {
+    const Eigen::Quaterniond q = solve_at(k * 10 * kMs);
+    EXPECT_LE(angle_between_deg(q, last), ease_deg_s * 0.01 + 1e-6) << "frame " << k;
+    last = q;
+    if (angle_between_deg(q, target) > 1e-6) frames = k;
+  }
+  // 150 deg at ease_deg_s, then exactly the new calibration; the other segments never moved.
+  EXPECT_EQ(frames, static_cast<int>(std::ceil(150.0 / (ease_deg_s * 0.01))) - 1);
+  EXPECT_LT(angle_between_deg(last, target), 1e-6);
+  for (int s = 0; s < kSegmentCount; ++s) {
+    if (s == thigh) continue;
+    EXPECT_LT(angle_between_deg(sk.q_earth_segment()[s], c.segment_from_sensor(s, pose[s])), 1e-6);
+  }
+  // Not eased: at once (a new calibration, a heading reset).
+  sk.set_calibration(c);
+  EXPECT_LT(angle_between_deg(solve_at(2000 * kMs), c.segment_from_sensor(thigh, pose[thigh])),
+            1e-6);
+  // A calibration gone non-finite is rejected by the ease, never published as NaN.
+  Calibration bad = c;
+  bad.q_correction[thigh].coeffs().setConstant(std::numeric_limits<double>::quiet_NaN());
+  sk.set_calibration(bad, true);
+  sk.set_calibration(c, true);
+  EXPECT_TRUE(solve_at(2010 * kMs).coeffs().allFinite());
 }
 
 TEST(Skeleton, DeterministicBitIdenticalFrames) {

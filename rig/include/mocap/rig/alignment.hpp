@@ -19,8 +19,8 @@
 //  - turn_mounting: the sensor's frame had turned before the capture (its facing was wrong, or
 //    its filter's frame turned since): the mounting turns so that the segment keeps its pose at
 //    the capture, q_ss' = q_ss T^-1 Y^-1 T (T the segment's orientation in the pose).
-// A new facing of a 6D sensor is both (the pose at the capture is kept); one found while tracking
-// can be turned onto gradually (turn_facing_towards, step_facing: the target is this class's too).
+// A new facing of a 6D sensor is both (the pose at the capture is kept). Every change applies at
+// once: the published pose eases onto one found while tracking (Skeleton::set_calibration).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -42,9 +42,6 @@ struct SegmentAlignment {
   bool own_frame = false;
   /// The mounting's yaw: the segment's facing at the capture in its sensor's frame.
   Facing facing;
-  /// A facing found while tracking that the segment is turning onto (unknown: none;
-  /// turn_facing_towards, step_facing).
-  Facing facing_target;
   double heading_rad = 0;  ///< the yaw in front of the sensor's orientation
   AlignSource heading_source = AlignSource::none;
   double heading_sigma_deg = 180;  ///< of the segment's heading relative to the body's
@@ -78,18 +75,7 @@ class Alignment {
   /// A better facing for segment s, e.g. from motion. Own-frame sensor: mounting and heading
   /// turn together (the segment keeps its pose at the capture). Sensor sharing the earth frame:
   /// recorded only (its mounting follows the body heading). Returns the facing's change, rad.
-  /// Ends any turn towards a target.
   double set_facing(int s, const Facing& f);
-  /// Segment s is to turn onto facing f gradually, by step_facing (a facing found while
-  /// tracking: applied at once it can turn a segment tens of degrees in one frame).
-  void turn_facing_towards(int s, const Facing& f);
-  /// One step of segment s's turn towards its target: at most max_rad (none: nothing).
-  void step_facing(int s, double max_rad);
-  /// The facing segment s is turning onto, else the one it holds.
-  const Facing& held_facing(int s) const {
-    const SegmentAlignment& a = seg_[static_cast<size_t>(s)];
-    return a.facing_target.known() ? a.facing_target : a.facing;
-  }
   /// The body faced `heading_rad` at the capture: the mountings of the sensors sharing the
   /// earth frame turn, the own-frame sensors' headings turn with it.
   void set_body_heading(double heading_rad, AlignSource source, double sigma_deg);
@@ -134,8 +120,6 @@ class Alignment {
   /// The segment's orientation in the capture's pose, earth frame (T above).
   Eigen::Quaterniond pose_orientation(int s) const;
   void changed(int s);
-  /// set_facing without ending a turn (step_facing's step).
-  double apply_facing(int s, const Facing& f);
 
   PoseCapture capture_;
   bool have_capture_ = false;

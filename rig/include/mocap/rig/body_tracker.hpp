@@ -10,9 +10,9 @@
 //      (calibrate.hpp) into the segments' alignment,
 //   5. mounting from motion: the mounting motion's window after an N-pose (mounting_motion.hpp)
 //      and the knees' hinge axes from any motion (hinge_axis.hpp), each giving facings that
-//      replace assumed ones (facing.hpp: replaces; one found while tracking turns its segment
-//      at most kFacingSlewDegS, never in one frame); a segment that gets its facing becomes the
-//      reference of the fits below it. Not the elbows: a forearm sensor turns with pronation
+//      replace assumed ones (facing.hpp: replaces; the published pose eases onto one found
+//      while tracking, never in one frame: skeleton.hpp); a segment that gets its facing becomes
+//      the reference of the fits below it. Not the elbows: a forearm sensor turns with pronation
 //      (the forearm segment carries it, skeleton.md), so its axis is not fixed in that sensor's
 //      frame; fitted as a hinge it turned the arms 30-140 deg off in 6D after an N-pose alone
 //      (24 CMU clips, mean 12.9 deg against 4.4 without); in 6D each knee's two segments'
@@ -148,6 +148,8 @@ class BodyTracker {
   MountingMotion mounting_;
   Alignment align_;
   uint64_t align_revision_seen_ = 0;
+  /// The next published alignment is a new calibration: applied at once, not eased.
+  bool snap_alignment_ = false;
   std::optional<CalibrationResult> result_;
   /// The N-pose capture an arm_swing calibration waits to pair with a T-pose.
   std::optional<PoseCapture> npose_;
@@ -209,15 +211,10 @@ class BodyTracker {
   /// start over against the nearest known one above them.
   void refit_against(int s);
   /// Facings found from motion: each replaces a held one where replaces() says so; those of
-  /// sensors sharing the earth frame vote on the body heading. slew: found while tracking, an
-  /// own-frame segment turns onto it at kFacingSlewDegS (Alignment::step_facing, step 5)
-  /// instead of at once.
-  void apply_facings(const std::array<Facing, kSegmentCount>& facing, bool slew);
-  /// A facing found while tracking turns the segment at most this fast: a first hinge answer
-  /// 60-80 deg off the site prior turned the real run's thighs 78 deg in one frame (a flip to
-  /// the eye). Slower costs the knees while it turns (real run 9.1 / 9.4 deg applied at once,
-  /// 9.2 / 9.5 at 360 deg/s, 9.3 / 9.7 at 180, 9.6 / 9.9 at 90; CMU 6D unchanged).
-  static constexpr double kFacingSlewDegS = 360.0;
+  /// sensors sharing the earth frame vote on the body heading. ease: found while tracking, the
+  /// published pose eases onto it (skeleton.hpp); otherwise (the mounting motion, a step of the
+  /// calibration) it is part of a new calibration and applies at once.
+  void apply_facings(const std::array<Facing, kSegmentCount>& facing, bool ease);
   /// A hinge's axes: the facings of its two segments.
   struct Hinge;
   void apply_hinge_axes(Hinge& h);

@@ -80,6 +80,10 @@ struct AccuracyResult {
   /// estimate lets a correction of one segment move the others' figures).
   std::array<double, kSegmentCount> metric_segment_alone_g_deg{};
   double metric_mean_deg = 0, alone_mean_deg = 0;
+  /// Per segment with a sensor, the largest turn between two evaluated frames beyond its
+  /// sensor's filter alone's turn over them: a correction applied in one frame shows here as a
+  /// snap (degrees).
+  std::array<double, kSegmentCount> max_jump_deg{};
   double root_drift_m = 0;       ///< horizontal pelvis error at the end
   double root_max_error_m = 0;   ///< largest horizontal pelvis error during the motion
   double distance_walked_m = 0;  ///< true horizontal pelvis path length

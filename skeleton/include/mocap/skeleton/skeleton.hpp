@@ -1,13 +1,18 @@
 // The skeleton solver: per-segment earth-frame sensor orientations in, a whole-body posture
 // (PoseFrame) out. Forward kinematics as in the thesis's Figure 29: each segment's orientation
 // comes from its own sensor through the calibration (q_correction q_earth_sensor
-// q_sensor_segment, nothing else: a segment is never worse than its own sensor's filter);
+// q_sensor_segment, nothing else: a segment is never worse than its own sensor's filter, except
+// for the ease below while an alignment found while tracking turns it);
 // positions follow the parent chain by the joint offsets; segments without a sensor are
 // interpolated between tracked neighbours along their chain (e.g. torso between pelvis and neck) or
 // follow their parent. Joint rotations are checked against swing-twist/hinge limits and violations
 // reported per joint, never clamped (real people exceed textbook ranges: docs/skeleton.md); the
 // root moves with the stance foot or is pinned. The solve never changes the calibration; only
-// set_calibration does (the body tracker's alignment owns it: rig/alignment.hpp).
+// set_calibration does (the body tracker's alignment owns it: rig/alignment.hpp). An alignment
+// found while tracking (set_calibration with ease) changes the calibration at once, but each
+// segment's published orientation turns onto it at SkeletonOptions::ease_deg_s, never in one
+// frame: a heading found from motion 60-160 deg off, applied at once, snapped a segment over
+// between two frames, which a user sees as a flip (and a recorded take or a BVH export keeps).
 //
 // Per-frame work (set_sensor_orientation, solve) never allocates, and is deterministic: identical
 // inputs give bit-identical frames.
@@ -34,6 +39,8 @@ struct SkeletonOptions {
   int64_t stale_after_ns = 200'000'000;
   /// Time constant of the per-joint violation average (the drift signal), seconds.
   double violation_tau_s = 2.0;
+  /// How fast a segment's published orientation turns onto an eased calibration change.
+  double ease_deg_s = 360.0;
 };
 
 class Skeleton {
@@ -42,8 +49,10 @@ class Skeleton {
            SkeletonOptions options = {});
 
   /// Applies a calibration (copies it). Without one, sensors are taken as aligned with their
-  /// segments (q_sensor_segment = identity).
-  void set_calibration(const Calibration& c);
+  /// segments (q_sensor_segment = identity). ease: a change of the alignment in use (not a new
+  /// calibration): each segment's published orientation turns onto it at options().ease_deg_s
+  /// from where it was; otherwise, and for any turn still under way, at once.
+  void set_calibration(const Calibration& c, bool ease = false);
   /// The calibration in use (save this one).
   const Calibration& calibration() const { return calib_; }
   /// Counts every change of calibration() (set, heading reset): a caller that saves the
@@ -92,11 +101,17 @@ class Skeleton {
   const SkeletonOptions& options() const { return opt_; }
 
  private:
+  /// Turns segment i's remaining ease towards identity by dt_s of easing; returns it.
+  Eigen::Quaterniond ease_step(int i, double dt_s);
+
   BodyModel model_;
   JointLimits limits_;
   RigMapping rig_;
   SkeletonOptions opt_;
   Calibration calib_;  ///< as set (plus heading resets)
+  /// Per segment, the rotation (earth frame, left of the calibrated orientation) still to be
+  /// eased out of the published orientation (identity: none).
+  std::array<Eigen::Quaterniond, kSegmentCount> q_ease_;
   uint64_t calib_revision_ = 0;
   RootMotion root_;
 
