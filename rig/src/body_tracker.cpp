@@ -153,14 +153,16 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   const int seg = sensor.segment;
   if (seg < 0) return;
   // 3. The sensor's orientation as its segment uses it; a watched local field may turn the
-  //    mounting once it turns.
+  //    mounting once it turns (and the held heading with it, or let it go: no motion, so the
+  //    published segment is eased onto it in step 7, as an alignment found while tracking).
   LocalFieldWatch& watch = field_watch_[k];
-  if (watch.holding()) {
+  Eigen::Quaterniond q_held = Eigen::Quaterniond::Identity();
+  const bool held = watch.holding();
+  if (held) {
+    q_held = q_earth_sensor(i, o);
     double turned_rad = 0;
-    if (s.has(kFieldMag) && watch.on_field(o, dt_s, turned_rad)) {
+    if (s.has(kFieldMag) && watch.on_field(o, dt_s, turned_rad))
       align_.turn_mounting(seg, turned_rad, AlignSource::local_field);
-      snap_alignment_ = true;  // the held heading turns with it in this sample: not eased
-    }
     watch.on_sample(o, dt_s);
   }
   const Eigen::Quaterniond q = q_earth_sensor(i, o);
@@ -192,6 +194,10 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   }
   publish_alignment();
   // 7. The segment's input: orientation and the filter's flags.
+  if (held && q_held.angularDistance(q) > 0) {
+    const Calibration& c = align_.calibration();
+    skeleton_.ease_segment(seg, c.segment_from_sensor(seg, q_held), c.segment_from_sensor(seg, q));
+  }
   skeleton_.set_sensor_orientation(seg, q, s.t_host_ns, sensor_health(i, o).segment_flags());
 }
 

@@ -56,14 +56,10 @@ void Skeleton::set_calibration(const Calibration& c, bool ease) {
   for (int i = 0; i < kSegmentCount; ++i) {
     const bool eased = ease && calib_.valid && c.valid && calib_.calibrated[i] && c.calibrated[i] &&
                        have_[i] && opt_.ease_deg_s > 0;
-    if (!eased) {
+    if (eased)
+      ease_segment(i, calib_.segment_from_sensor(i, q_es_[i]), c.segment_from_sensor(i, q_es_[i]));
+    else
       q_ease_[i].setIdentity();
-      continue;
-    }
-    // Published before: ease old; after: ease' new. Continuous where ease' = ease old new^-1.
-    const Eigen::Quaterniond e = q_ease_[i] * calib_.segment_from_sensor(i, q_es_[i]) *
-                                 c.segment_from_sensor(i, q_es_[i]).conjugate();
-    q_ease_[i] = e.coeffs().allFinite() ? e.normalized() : Eigen::Quaterniond::Identity();
   }
   calib_ = c;
   ++calib_revision_;
@@ -71,6 +67,14 @@ void Skeleton::set_calibration(const Calibration& c, bool ease) {
 
 void Skeleton::set_sensor_live(int segment, bool live) {
   if (segment >= 0 && segment < kSegmentCount) dead_[segment] = !live;
+}
+
+void Skeleton::ease_segment(int segment, const Eigen::Quaterniond& from,
+                            const Eigen::Quaterniond& to) {
+  if (segment < 0 || segment >= kSegmentCount || !have_[segment] || opt_.ease_deg_s <= 0) return;
+  // Published before: ease from; after: ease' to. Continuous where ease' = ease from to^-1.
+  const Eigen::Quaterniond e = q_ease_[segment] * from * to.conjugate();
+  q_ease_[segment] = e.coeffs().allFinite() ? e.normalized() : Eigen::Quaterniond::Identity();
 }
 
 Eigen::Quaterniond Skeleton::ease_step(int i, double dt_s) {

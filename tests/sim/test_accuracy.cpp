@@ -183,7 +183,9 @@ TEST(RealMotion, SloppyNPoseStillCalibratesAndSaysHowFarOff) {
 // normal). The calibration suspects it, the filter holds its heading and turns onto the earth's
 // field once the field has turned by about as much (the person walked away), and the mounting
 // turns with it: measured forearm 2.5 deg against 18.9 for its filter alone, mean 3.61 vs 5.11.
-// Segments the tracker left alone score the same under one world rotation for both.
+// Segments the tracker left alone score the same under one world rotation for both. The turn
+// onto the earth's field is eased in like any alignment found while tracking: the forearm's
+// largest turn beyond its filter alone's between two frames 3.1 deg (in one frame: 6.1).
 TEST(RealMotion, LocalFieldAtTheCalibrationIsCarriedByTheSiteNormal) {
   AccuracyOptions o = after_moves(clip("01_11"), 1);
   o.disturbance = "both";
@@ -193,6 +195,7 @@ TEST(RealMotion, LocalFieldAtTheCalibrationIsCarriedByTheSiteNormal) {
   const int fr = index(Segment::forearm_r);
   EXPECT_LT(r.metric_segment_deg[fr], 0.5 * r.alone_segment_deg[fr]);
   EXPECT_LT(r.metric_mean_deg, 0.85 * r.alone_mean_deg);
+  EXPECT_LE(r.max_jump_deg[fr], 4.5);
   for (int s = 0; s < kSegmentCount; ++s) {
     if (r.alone_segment_deg[s] == 0) continue;
     EXPECT_LE(r.metric_segment_alone_g_deg[s], r.alone_segment_deg[s] + 0.1) << kSegmentNames[s];

@@ -53,6 +53,10 @@ class Skeleton {
   /// calibration): each segment's published orientation turns onto it at options().ease_deg_s
   /// from where it was; otherwise, and for any turn still under way, at once.
   void set_calibration(const Calibration& c, bool ease = false);
+  /// Segment s's orientation changes from `from` to `to` (earth frame) by no motion of its own
+  /// (e.g. its sensor's orientation as the segment uses it switched source): the published one
+  /// turns onto it at options().ease_deg_s, as for an eased calibration change.
+  void ease_segment(int segment, const Eigen::Quaterniond& from, const Eigen::Quaterniond& to);
   /// The calibration in use (save this one).
   const Calibration& calibration() const { return calib_; }
   /// Counts every change of calibration() (set, heading reset): a caller that saves the
