@@ -54,9 +54,7 @@ void Skeleton::set_sensor_orientation(int segment, const Eigen::Quaterniond& q, 
 
 void Skeleton::set_calibration(const Calibration& c, bool ease) {
   for (int i = 0; i < kSegmentCount; ++i) {
-    const bool eased = ease && calib_.valid && c.valid && calib_.calibrated[i] && c.calibrated[i] &&
-                       have_[i] && opt_.ease_deg_s > 0;
-    if (eased)
+    if (ease && calib_.valid && c.valid && calib_.calibrated[i] && c.calibrated[i])
       ease_segment(i, calib_.segment_from_sensor(i, q_es_[i]), c.segment_from_sensor(i, q_es_[i]));
     else
       q_ease_[i].setIdentity();
@@ -79,13 +77,14 @@ void Skeleton::ease_segment(int segment, const Eigen::Quaterniond& from,
 
 Eigen::Quaterniond Skeleton::ease_step(int i, double dt_s) {
   Eigen::Quaterniond& e = q_ease_[i];
-  if (e.w() < 0) e.coeffs() = -e.coeffs();  // the short way
-  const double angle_rad = 2.0 * std::acos(std::min(1.0, e.w()));
+  const double angle_rad = e.angularDistance(Eigen::Quaterniond::Identity());
   const double step_rad = opt_.ease_deg_s * kRadPerDeg * dt_s;
   if (!(angle_rad > step_rad)) {
     e.setIdentity();
   } else {
-    e = Eigen::Quaterniond::Identity().slerp(1.0 - step_rad / angle_rad, e).normalized();
+    e = Eigen::Quaterniond::Identity()
+            .slerp(1.0 - step_rad / angle_rad, e)
+            .normalized();  // short way
   }
   return e;
 }
