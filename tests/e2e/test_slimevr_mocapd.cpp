@@ -74,19 +74,21 @@ TEST(SlimeVrMocapd, TrackersConnectStreamCalibrateByButtonRecordAndReplay) {
   mocap::SimSlimeTracker board3(o);
   board3.start();
 
-  // Every sensor streams through the handshake the daemon answered.
+  // Every sensor streams through the handshake the daemon answered. (Board 3 is asked to be
+  // connected in the same look: on a loaded machine a board that missed the server for 3 s
+  // handshakes again, and is back within a second.)
   nlohmann::json st;
   bool streaming = false;
   for (int i = 0; i < 150 && !streaming; ++i) {
     std::this_thread::sleep_for(100ms);
     st = status(sock);
     if (!st.is_object() || !st.contains("sensors")) continue;
-    streaming = true;
+    streaming = board3.connected();
     for (const auto& s : st["sensors"])
       streaming = streaming && s["state"] == "streaming";
   }
-  ASSERT_TRUE(streaming) << st.dump() << slurp_file((dir / "mocapd.log.err").string());
-  EXPECT_TRUE(board3.connected());
+  ASSERT_TRUE(streaming) << board3.connected() << st.dump()
+                         << slurp_file((dir / "mocapd.log.err").string());
   EXPECT_FALSE(st["calibrated"].get<bool>());
 
   // The tracker's reset button (packet 21, full reset) runs the calibration.
