@@ -51,6 +51,10 @@ nlohmann::json to_json(const sim::AccuracyResult& r) {
     if (s > 0) joints[std::string(kJointNames[s])] = r.joint_rmse_deg[s];
   }
   j["joint_rmse_deg"] = joints;
+  if (r.dropout_joint_after_deg >= 0) {
+    j["dropout_joint_before_deg"] = r.dropout_joint_before_deg;
+    j["dropout_joint_after_deg"] = r.dropout_joint_after_deg;
+  }
   j["segment_rmse_deg"] = segments;
   j["hinge_max_rmse_deg"] = r.hinge_max_rmse_deg;
   j["three_dof_max_rmse_deg"] = r.three_dof_max_rmse_deg;
@@ -159,7 +163,7 @@ void print_markdown_row(const sim::AccuracyResult& r) {
 /// mocap bench accuracy's command line (declared in add_accuracy).
 struct AccuracyCommandOptions {
   std::string motion = "all", disturbance = "none,both", heading = "normals", mag = "on", clips,
-              seeds, filter_param, sensor_errors, mount = "sites", mounting_motion = "on";
+              seeds, filter_param, sensor_errors, mount = "sites", mounting_motion = "on", dropout;
   long seed = 1;
   double rate_hz = 100, frame_rate_hz = 0;
   bool calibration_moves = false, gyro_scale_calibration = false, warmup = false, ideal = false,
@@ -191,6 +195,25 @@ int run_accuracy(const AccuracyCommandOptions& args) {
 
   base.warmup = args.warmup;
   base.mounting_motion = args.mounting_motion == "on";
+  if (!args.dropout.empty()) {
+    // SEGMENT:START:SECONDS
+    const auto a = args.dropout.find(':'), b = args.dropout.rfind(':');
+    const auto seg = segment_from_name(args.dropout.substr(0, a));
+    char* end = nullptr;
+    if (a != std::string::npos && b != a) {
+      base.dropout_start_s = std::strtod(args.dropout.c_str() + a + 1, &end);
+      if (end == args.dropout.c_str() + b)
+        base.dropout_s = std::strtod(args.dropout.c_str() + b + 1, &end);
+    }
+    if (!seg || b == a || *end != 0 || base.dropout_start_s < 0 || base.dropout_s <= 0) {
+      std::fprintf(stderr,
+                   "mocap bench accuracy: --dropout '%s': expected SEGMENT:START_S:SECONDS (e.g. "
+                   "forearm_l:5:3)\n",
+                   args.dropout.c_str());
+      return 2;
+    }
+    base.dropout_segment = index(*seg);
+  }
   if (args.ideal) base.sensor = sim::SensorModelParams::ideal();
   if (!args.sensor_errors.empty()) {
     std::string bad;
@@ -302,6 +325,9 @@ void add_accuracy(CLI::App& bench, int& exit_code) {
                 "on: the calibration moves also serve as the mounting motion (facings from the "
                 "segments' tilt, as `mocapctl calibrate mounting`); off: N-pose only")
       ->check(CLI::IsMember({"on", "off"}));
+  c->add_option("--dropout", o->dropout,
+                "SEGMENT:START_S:SECONDS: that segment's sensor sends nothing for SECONDS from "
+                "START_S into the evaluated motion (a radio drop, a tracker rebooting)");
   c->add_flag("--markdown", o->markdown, "also print a markdown table on stderr");
   c->callback([o, &exit_code] { exit_code = run_accuracy(*o); });
 }

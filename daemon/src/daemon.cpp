@@ -370,7 +370,9 @@ std::string Daemon::status_json() const {
       e["alignment_heading"] = {{"source", rig::to_string(a.heading_source)},
                                 {"sigma_deg", round_to(a.heading_sigma_deg, 10)},
                                 {"rejected_turns", a.rejected_turns},
-                                {"corrected_turns", a.corrected_turns}};
+                                {"corrected_turns", a.corrected_turns},
+                                {"lost", a.heading_lost},
+                                {"lost_count", a.lost_headings}};
     }
     add_telemetry(st.telemetry[i], e);
     sensors.push_back(e);

@@ -122,6 +122,8 @@ CalibrationProgress RigEngine::calibration_progress() const {
     o.heading_sigma_deg = static_cast<float>(g.heading_sigma_deg);
     o.rejected_turns = g.rejected_turns;
     o.corrected_turns = g.corrected_turns;
+    o.heading_lost = g.heading_lost;
+    o.lost_headings = g.lost_headings;
   }
   return p;
 }

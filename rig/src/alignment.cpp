@@ -150,6 +150,22 @@ void Alignment::turn_heading(int s, double yaw_rad, AlignSource source, double s
   changed(s);
 }
 
+void Alignment::lose_heading(int s) {
+  if (s < 0 || s >= kSegmentCount || !seg_[s].aligned || !seg_[s].own_frame) return;
+  SegmentAlignment& a = seg_[s];
+  a.heading_source = AlignSource::none;
+  a.heading_sigma_deg = 180;
+  a.heading_lost = true;
+  ++a.lost_headings;
+  ++revision_;
+}
+
+void Alignment::regain_heading(int s) {
+  if (s < 0 || s >= kSegmentCount || !seg_[s].heading_lost) return;
+  seg_[s].heading_lost = false;
+  ++revision_;
+}
+
 void Alignment::realign(int s, double yaw_rad, AlignSource source, double sigma_deg) {
   if (s < 0 || s >= kSegmentCount || !seg_[s].aligned || !std::isfinite(yaw_rad)) return;
   SegmentAlignment& a = seg_[s];

@@ -22,6 +22,10 @@ namespace {
 /// on, the knee would turn away from it.
 const double kCosHingeAgree = std::cos(10.0 * kRadPerDeg);
 
+/// A lost heading found by its knee's hinge is found once the hold has followed it for three
+/// of its time constants (95 % of the error taken out), counted in horizontal-axis seconds.
+const double kHingeFoundAfterS = 3 * HingeHeadingOptions{}.tau_s;
+
 /// The configured setup with each sensor's site normal filled in (its own, or its segment's
 /// standard site; none for a sensor strapped anyhow).
 CalibrationSetup calibration_setup(const std::vector<TrackerSensor>& sensors,
@@ -152,6 +156,8 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   prev_t_ns_[k] = s.t_host_ns;
   const int seg = sensor.segment;
   if (seg < 0) return;
+  if (opt_.heading_lost_after_s > 0 && dt_s > opt_.heading_lost_after_s && heading_.active())
+    lose_heading(seg);  // found again in step 6
   // 3. The sensor's orientation as its segment uses it; a watched local field may turn the
   //    mounting once it turns (and the held heading with it, or let it go: no motion, so the
   //    published segment is eased onto it in step 7, as an alignment found while tracking).
@@ -269,21 +275,49 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
   apply_facings(f, true);
 }
 
+bool BodyTracker::hinge_holds(const Hinge& h) const {
+  const SegmentAlignment &au = align_.segment(h.upper), &al = align_.segment(h.lower);
+  if (!au.aligned || !al.aligned || !au.own_frame || !al.own_frame || !h.axis.known() ||
+      (au.heading_lost && al.heading_lost))
+    return false;
+  // Only where the segments' left axes are the hinge's axes (kCosHingeAgree).
+  const Calibration& c = align_.calibration();
+  return std::abs((c.q_sensor_segment[h.upper] * Eigen::Vector3d::UnitY()).dot(h.axis.axis1())) >=
+             kCosHingeAgree &&
+         std::abs((c.q_sensor_segment[h.lower] * Eigen::Vector3d::UnitY()).dot(h.axis.axis2())) >=
+             kCosHingeAgree;
+}
+
+const BodyTracker::Hinge* BodyTracker::finding_hinge(int s) const {
+  for (const Hinge& h : hinges_)
+    if ((h.upper == s || h.lower == s) && lost(s) && hinge_holds(h)) return &h;
+  return nullptr;
+}
+
 void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s,
                                      int64_t t_ns) {
+  if (!hinge_holds(h)) return;
   const SegmentAlignment &au = align_.segment(h.upper), &al = align_.segment(h.lower);
-  if (!au.aligned || !al.aligned || !au.own_frame || !al.own_frame || !h.axis.known()) return;
   const Calibration& c = align_.calibration();
-  // Only where the segments' left axes are the hinge's axes (kCosHingeAgree).
-  if (std::abs((c.q_sensor_segment[h.upper] * Eigen::Vector3d::UnitY()).dot(h.axis.axis1())) <
-          kCosHingeAgree ||
-      std::abs((c.q_sensor_segment[h.lower] * Eigen::Vector3d::UnitY()).dot(h.axis.axis2())) <
-          kCosHingeAgree)
-    return;
   const int up = skeleton_.rig().sensor_for_segment[h.upper];
+  // A lost heading of either segment is found by the hinge: followed whatever its error, by
+  // that segment alone, until it was followed found_after_s (in horizontal-axis seconds).
+  const int lost_seg = au.heading_lost ? h.upper : al.heading_lost ? h.lower : -1;
   h.heading.add(c.segment_from_sensor(h.upper, q_earth_sensor(up)) * Eigen::Vector3d::UnitY(),
-                c.segment_from_sensor(h.lower, q) * Eigen::Vector3d::UnitY(), dt_s);
+                c.segment_from_sensor(h.lower, q) * Eigen::Vector3d::UnitY(), dt_s, lost_seg < 0);
   if (!h.heading.due(t_ns)) return;
+  if (lost_seg >= 0) {
+    const double yaw = h.heading.take();
+    align_.turn_heading(lost_seg, lost_seg == h.lower ? yaw : -yaw, AlignSource::joint,
+                        align_.segment(lost_seg).heading_sigma_deg);
+    if (h.heading.followed_s() >= kHingeFoundAfterS) {
+      align_.regain_heading(lost_seg);
+      heading_found_[lost_seg] = true;
+      heading_.restart(lost_seg, heading_.reference(lost_seg));  // its evidence: the lost frame
+      found_again(lost_seg);
+    }
+    return;
+  }
   if (h.heading.take_refused() > 0) align_.reject_turn(h.lower);
   // Neither segment's 6D frame is known better than the other's: each turns half way (CMU 6D,
   // 24 clips x 3 seeds: turning the shank alone onto the thigh took a thigh's drift into the
@@ -298,7 +332,7 @@ void BodyTracker::hold_range_heading(RangeJoint& r, const Eigen::Quaterniond& q,
                                      int64_t t_ns) {
   const int parent = kSegmentParent[r.child];
   const SegmentAlignment &ac = align_.segment(r.child), &ap = align_.segment(parent);
-  if (!ac.aligned || !ap.aligned || !ac.own_frame) return;
+  if (!ac.aligned || !ap.aligned || !ac.own_frame || ac.heading_lost || ap.heading_lost) return;
   const Calibration& c = align_.calibration();
   const int up = skeleton_.rig().sensor_for_segment[parent];
   if (up < 0) return;
@@ -472,7 +506,8 @@ std::array<bool, kSegmentCount> BodyTracker::own_heading_frames() const {
 bool BodyTracker::heading_known(int s, const std::array<bool, kSegmentCount>& own) const {
   // Known when its sensor shares the earth frame (magnetometer) or was aligned from its own
   // facing.
-  return skeleton_.rig().tracked(s) && (!own[s] || align_.segment(s).facing.known());
+  return skeleton_.rig().tracked(s) &&
+         (!own[s] || (align_.segment(s).facing.known() && !align_.segment(s).heading_lost));
 }
 
 int BodyTracker::known_above(int s, const std::array<bool, kSegmentCount>& own) const {
@@ -497,6 +532,9 @@ void BodyTracker::start_heading_from_motion() {
   // acceleration from the torso's sensor is off.
   refine_.fill(false);
   turned_rad_.fill(0);
+  refit_heading_only_.fill(false);
+  refine_after_found_.fill(false);
+  root_witness_ = witness_prev_ref_ = -1;
   if (opt_.heading_from_motion.refine_max_deg > 0 &&
       opt_.calibration.heading == HeadingSource::mount_normals)
     for (int s = 0; s < kSegmentCount; ++s) {
@@ -562,6 +600,47 @@ void BodyTracker::refit_against(int s) {
   }
 }
 
+void BodyTracker::lose_heading(int s) {
+  const SegmentAlignment& a = align_.segment(s);
+  if (!a.aligned || !a.own_frame || a.heading_lost) return;
+  align_.lose_heading(s);
+  refit_heading_only_[s] = true;
+  refine_after_found_[s] = refine_after_found_[s] || refine_[s];
+  refine_[s] = false;
+  turned_rad_[s] = 0;
+  heading_found_[s] = false;
+  const int ref = known_above(s, own_heading_frames());
+  heading_.restart(s, ref);
+  set_up_fit(s, ref);
+  // The root has nothing above it: a child's fit against it witnesses its heading.
+  if (ref < 0 && kSegmentParent[s] < 0 && root_witness_ < 0) {
+    const std::array<bool, kSegmentCount> own = own_heading_frames();
+    for (int c = 0; c < kSegmentCount && root_witness_ < 0; ++c)
+      if (kSegmentParent[c] == s && heading_known(c, own)) {
+        root_witness_ = c;
+        witness_prev_ref_ = heading_.reference(c);
+        heading_.restart(c, s);
+        set_up_fit(c, s);
+      }
+  }
+  // Its joints' holds start over; they wait while it is lost (hold_hinge_heading,
+  // hold_range_heading).
+  for (Hinge& h : hinges_)
+    if (h.upper == s || h.lower == s) h.heading.reset();
+  for (RangeJoint& r : ranges_)
+    if (r.child == s || kSegmentParent[r.child] == s) r.heading.reset();
+}
+
+void BodyTracker::found_again(int s) {
+  for (int t = 0; t < kSegmentCount; ++t) {
+    if (t == s || heading_.reference(t) != s) continue;
+    const int ref = t == root_witness_ ? witness_prev_ref_ : s;
+    heading_.restart(t, ref);
+    set_up_fit(t, ref);
+  }
+  if (kSegmentParent[s] < 0) root_witness_ = witness_prev_ref_ = -1;
+}
+
 void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   constexpr int64_t kEveryNs = 100'000'000;  // 10 Hz: the alignment is a slow constant
   constexpr double kMinTurnRad = 0.1 * kRadPerDeg;
@@ -573,6 +652,34 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
   const double refine_max_rad = opt_.heading_from_motion.refine_max_deg * kRadPerDeg;
   for (int s = 0; s < kSegmentCount; ++s) {
     double yaw = 0;
+    const int ref = heading_.reference(s);
+    // A fit against a lost segment waits for it, unless it witnesses the lost root: its first
+    // estimate turns the root (the other way), which is then found.
+    const bool witness = s == root_witness_ && lost(ref);
+    if (lost(ref) && !witness) continue;
+    // A lost heading is kept as the best guess until the fit has settled, then follows the
+    // fit whole until it is found (found_evidence): a first estimate from little evidence,
+    // applied at once and then held to the drift limit, locked on wrong (CMU 01_08: the
+    // forearm's first estimate 150 deg, the evidence after it 99 deg more, refused).
+    const int lost_seg = witness ? ref : lost(s) ? s : -1;
+    if (lost_seg >= 0 && finding_hinge(lost_seg)) continue;  // its hinge finds it
+    if (lost_seg >= 0) {
+      const double evidence = heading_.evidence(s);
+      if (evidence < opt_.heading_from_motion.settle_evidence || !heading_.estimate(s, yaw))
+        continue;
+      align_.turn_heading(lost_seg, witness ? -yaw : yaw, AlignSource::joint,
+                          align_.segment(lost_seg).heading_sigma_deg);
+      heading_.applied(s, yaw);
+      if (evidence >= opt_.heading_from_motion.found_evidence) {
+        align_.regain_heading(lost_seg);
+        heading_found_[lost_seg] = true;
+        // A refined segment is refined again within its band about the heading found (the
+        // fit's own bias from the model's joint centres is the band's business, not a drift).
+        refine_[lost_seg] = refine_after_found_[lost_seg];
+        found_again(lost_seg);
+      }
+      continue;
+    }
     if (!heading_.estimate(s, yaw)) continue;
     if (std::abs(yaw) < kMinTurnRad) continue;
     // A refined segment moves only when the evidence is off by more than the fit's own bias
@@ -606,8 +713,12 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
       if (std::abs(yaw) < 1e-9) continue;
     }
     heading_found_[s] = true;
-    // The sensor's frame turns by yaw; its mounting keeps the segment's calibration pose.
-    align_.realign(s, yaw, AlignSource::joint, align_.segment(s).heading_sigma_deg);
+    // The sensor's frame turns by yaw: after a lost heading its heading alone (the mounting is
+    // known), else its mounting keeps the segment's calibration pose (its facing was sought).
+    if (refit_heading_only_[s])
+      align_.turn_heading(s, yaw, AlignSource::joint, align_.segment(s).heading_sigma_deg);
+    else
+      align_.realign(s, yaw, AlignSource::joint, align_.segment(s).heading_sigma_deg);
     heading_.applied(s, yaw);
   }
 }

@@ -90,6 +90,10 @@ bool HeadingFromMotion::settling(int seg) const {
          f.sum.norm() >= opt_.settle_coherence * f.evidence;
 }
 
+double HeadingFromMotion::evidence(int seg) const {
+  return seg >= 0 && seg < kSegmentCount && fit_[seg].ref >= 0 ? fit_[seg].evidence : 0.0;
+}
+
 void HeadingFromMotion::applied(int seg, double yaw_rad) {
   if (seg < 0 || seg >= kSegmentCount) return;
   Fit& f = fit_[seg];

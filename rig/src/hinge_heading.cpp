@@ -9,7 +9,8 @@
 
 namespace mocap::rig {
 
-void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, double dt_s) {
+void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, double dt_s,
+                       bool refuse_far) {
   if (!(dt_s > 0) || dt_s > 0.1) return;
   if (!y1.allFinite() || !y2.allFinite()) return;
   const double h1 = std::hypot(y1.x(), y1.y()), h2 = std::hypot(y2.x(), y2.y());
@@ -17,11 +18,12 @@ void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, dou
   if (weight < 1e-3) return;
   // The yaw taking the lower axis' horizontal direction onto the upper's.
   const double error_rad = wrap_angle_rad(heading_of_rad(y1) - heading_of_rad(y2));
-  if (std::abs(error_rad) > opt_.max_error_deg * kRadPerDeg) {
+  if (refuse_far && std::abs(error_rad) > opt_.max_error_deg * kRadPerDeg) {
     ++refused_;
     return;
   }
   pending_.add(weight * error_rad * std::min(dt_s / opt_.tau_s, 1.0));
+  followed_s_ += weight * dt_s;
 }
 
 int HingeHeading::take_refused() {
@@ -33,6 +35,7 @@ int HingeHeading::take_refused() {
 void HingeHeading::reset() {
   pending_.reset();
   refused_ = 0;
+  followed_s_ = 0;
 }
 
 }  // namespace mocap::rig

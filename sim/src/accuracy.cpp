@@ -114,6 +114,10 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   PoseFrame frame;
   TruthFrame truth;
   std::array<double, kSegmentCount> joint_sq{}, seg_sq{};
+  // The dropped segment's joint to its parent; the root's, its joint with the torso.
+  const int drop_joint = o.dropout_segment == 0 ? index(Segment::torso) : o.dropout_segment;
+  double drop_before_sq = 0, drop_after_sq = 0;
+  int drop_before_n = 0, drop_after_n = 0;
   Eigen::Vector3d prev_true_root = Eigen::Vector3d::Zero();
   bool evaluating = false;
   // Filter heading error at the first evaluated frame, per sensor, and the running sums.
@@ -125,7 +129,11 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     const int64_t t_ns = to_ns(k * frame_s);
     samples.clear();
     perf.step_to(t_ns, samples);
+    const double dropout_from_s = eval_start_s + o.dropout_start_s;
+    const bool dropping =
+        k * frame_s >= dropout_from_s && k * frame_s < dropout_from_s + o.dropout_s;
     for (ImuSample& s : samples) {
+      if (dropping && index(Performer::sensor_segment(s.sensor_id)) == o.dropout_segment) continue;
       tracker.on_sample(s.sensor_id, s);
       ImuSample a = s;
       a.gyr_rad_s = a.gyr_rad_s.cwiseQuotient(tracker.sensor(s.sensor_id).gyr_scale);
@@ -184,6 +192,11 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       if (s > 0) {
         const double e = angle_deg(skeleton.q_parent_segment()[s], truth.q_parent_segment[s]);
         joint_sq[s] += e * e;
+        if (o.dropout_segment >= 0 && s == drop_joint) {
+          const double since_s = k * frame_s - eval_start_s - o.dropout_start_s;
+          if (since_s < 0) drop_before_sq += e * e, ++drop_before_n;
+          if (since_s >= o.dropout_s + 5.0) drop_after_sq += e * e, ++drop_after_n;
+        }
       }
     }
     const Eigen::Vector3d d = skeleton.p_earth_segment_m()[0] - truth.p_earth_segment_m[0];
@@ -210,6 +223,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   }
   if (r.frames == 0) return r;
   r.evaluated_s = r.frames * frame_s;
+  if (drop_before_n > 0) r.dropout_joint_before_deg = std::sqrt(drop_before_sq / drop_before_n);
+  if (drop_after_n > 0) r.dropout_joint_after_deg = std::sqrt(drop_after_sq / drop_after_n);
   double seg_sum = 0;
   int seg_n = 0;
   for (int s = 0; s < kSegmentCount; ++s) {

@@ -83,6 +83,25 @@ TEST(HingeHeading, RefusesAnErrorNoDriftMakes) {
   EXPECT_EQ(hold.take_refused(), 0);
 }
 
+// A lost heading being found: the same 90 deg is followed (at the time constant), and the time
+// followed is counted.
+TEST(HingeHeading, FollowsAnyErrorWhileALostHeadingIsFound) {
+  HingeHeading hold;
+  double taken_rad = 0;
+  for (int n = 0; n < 100; ++n) {
+    hold.add(Eigen::Vector3d::UnitY(), turned_by_yaw(Eigen::Vector3d::UnitY(), 90 * kRadPerDeg),
+             0.01, /*refuse_far=*/false);
+    if (hold.due(n * 10'000'000)) taken_rad += hold.take();
+  }
+  taken_rad += hold.take();
+  EXPECT_EQ(hold.take_refused(), 0);
+  // 1 s at a 2 s time constant, the error held: half of it.
+  EXPECT_NEAR(taken_rad, -0.5 * 90 * kRadPerDeg, 1e-9);  // the lower axis back onto the upper
+  EXPECT_NEAR(hold.followed_s(), 1.0, 1e-9);
+  hold.reset();
+  EXPECT_EQ(hold.followed_s(), 0.0);
+}
+
 TEST(HingeHeading, AVerticalAxisSaysNothing) {
   HingeHeading hold;
   const Eigen::Vector3d up(0.001, 0, 1);

@@ -27,6 +27,8 @@ struct SegmentAlignmentStatus {
   float mounting_sigma_deg = 180, heading_sigma_deg = 180;
   uint32_t rejected_turns = 0;   ///< turns from motion refused as implausible
   uint32_t corrected_turns = 0;  ///< far turns accepted as a wrong first facing's correction
+  bool heading_lost = false;     ///< its own heading frame lost (a dropout), not yet found again
+  uint32_t lost_headings = 0;    ///< how often that happened
 };
 
 /// How far the calibration has got (for the status): the last capture's outcome, whether the

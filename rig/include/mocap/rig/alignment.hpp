@@ -49,6 +49,10 @@ struct SegmentAlignment {
   uint32_t rejected_turns = 0;
   /// Far turns accepted as the correction of a wrong first facing (turn_guard.hpp).
   uint32_t corrected_turns = 0;
+  /// The sensor's own heading frame was lost (lose_heading: a dropout) and is not yet found
+  /// again; how many times that happened.
+  bool heading_lost = false;
+  uint32_t lost_headings = 0;
 };
 
 class Alignment {
@@ -79,8 +83,8 @@ class Alignment {
   /// The body faced `heading_rad` at the capture: the mountings of the sensors sharing the
   /// earth frame turn, the own-frame sensors' headings turn with it.
   void set_body_heading(double heading_rad, AlignSource source, double sigma_deg);
-  /// Turns the segment's heading by yaw_rad (its sensor's frame drifted against the body's);
-  /// the mounting stays.
+  /// Turns the segment's heading by yaw_rad (its sensor's frame drifted against the body's, or
+  /// a lost heading found again); the mounting stays.
   void turn_heading(int s, double yaw_rad, AlignSource source, double sigma_deg);
   /// The sensor's heading alignment was off by yaw_rad at the capture: heading and mounting
   /// turn together, the segment keeps its pose at the capture (a better facing, -change).
@@ -88,6 +92,13 @@ class Alignment {
   /// The sensor's filter frame turned by yaw_rad since the capture (a local field left
   /// behind): the mounting turns so that the segment keeps its pose at the capture.
   void turn_mounting(int s, double yaw_rad, AlignSource source);
+  /// Segment s's sensor lost its own heading frame (silent long enough that its filter could
+  /// not follow, or a tracker that rebooted): the heading is kept as the best guess but marked
+  /// lost (source none, sigma 180, counted) until regain_heading. Own-frame sensors only; the
+  /// mounting stays (the strap did not move); turn_heading turns it meanwhile.
+  void lose_heading(int s);
+  /// Segment s's lost heading is found again (its turns since were the finding).
+  void regain_heading(int s);
   /// A turn of segment s from motion was refused as implausible (counted, reported).
   void reject_turn(int s) {
     if (s >= 0 && s < kSegmentCount) ++seg_[static_cast<size_t>(s)].rejected_turns;

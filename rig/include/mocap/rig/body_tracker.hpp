@@ -20,7 +20,9 @@
 //      and each thigh's heading to its hip's range (range_heading.hpp: a heading a clipped
 //      gyro lost),
 //   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
-//      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted,
+//      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted; a
+//      sensor silent for heading_lost_after_s lost its heading (marked lost before step 3) and
+//      is found again here, or by its knee's hinge hold in step 5,
 //   7. the skeleton's input (orientation and flags);
 // and per frame the skeleton solve (each segment holds its sensor's newest orientation).
 //
@@ -78,6 +80,11 @@ struct TrackerOptions {
   HeadingFromMotionOptions heading_from_motion;  ///< 6D only
   /// Length of the mounting motion's window after its N-pose capture, seconds.
   double mounting_motion_s = 5.0;
+  /// A sensor with a heading frame of its own (6D) silent this long lost its heading: its
+  /// filter integrates kMaxGap_s of a gap and a tracker that rebooted starts a new frame, so
+  /// whatever the body turned meanwhile is missing. The heading is found again from motion
+  /// against its neighbours (step 6), as a heading never known; 0 disables. Seconds.
+  double heading_lost_after_s = 1.0;
 };
 
 class BodyTracker {
@@ -191,6 +198,23 @@ class BodyTracker {
   /// Per segment: aligned from its own site normal and refined from motion within a band, and
   /// how far it has been turned so far, rad.
   std::array<bool, kSegmentCount> refine_{};
+  /// Per segment: its heading was lost since the calibration; the fit turns its heading alone
+  /// (the mounting is known), not its facing.
+  std::array<bool, kSegmentCount> refit_heading_only_{};
+  /// Per segment: refined before its heading was lost (refined again once it is found).
+  std::array<bool, kSegmentCount> refine_after_found_{};
+  /// Segment s's sensor lost its own heading frame (heading_lost_after_s): marked lost, fitted
+  /// afresh against the nearest known segment above it (or, for the root, a child fitted
+  /// against it), its joint holds paused until it is found.
+  void lose_heading(int s);
+  /// Whether segment s's heading is lost now.
+  bool lost(int s) const { return s >= 0 && align_.segment(s).heading_lost; }
+  /// The lost root's witness: a child whose fit against the root turns the root (the child's
+  /// yaw onto it, the other way round), and that child's reference before (-1: none).
+  int root_witness_ = -1, witness_prev_ref_ = -1;
+  /// Segment s's heading was found again: the fits against it, whose evidence was taken in its
+  /// lost frame, start over.
+  void found_again(int s);
   std::array<double, kSegmentCount> turned_rad_{};
   /// The sensor's orientation as its segment uses it (step 3), from the filter's output o.
   Eigen::Quaterniond q_earth_sensor(int i, const FilterOutput& o) const;
@@ -227,6 +251,11 @@ class BodyTracker {
   /// 6D: the hinge's relative heading held to its axis (hinge_heading.hpp), from a sample of
   /// its lower segment's sensor (orientation q, dt_s since its previous sample).
   void hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s, int64_t t_ns);
+  /// The hinge's hold can act: both segments aligned in frames of their own, the axes known
+  /// and on the segments' left axes, at most one of them lost.
+  bool hinge_holds(const Hinge& h) const;
+  /// A hinge whose hold finds segment s's lost heading (nullptr: none; its fit does).
+  const Hinge* finding_hinge(int s) const;
   std::array<Hinge, 2> hinges_;
   /// The running estimates' far answers: refused, or a wrong first answer corrected.
   TurnGuard turn_guard_;

@@ -53,6 +53,12 @@ struct HeadingFromMotionOptions {
   double settle_evidence = 1.0;
   double settle_coherence = 0.7;
   double settle_turn_deg_s = 20.0;
+  /// A heading lost in a dropout (BodyTracker: heading_lost_after_s) is found again by the
+  /// same fit: from settle_evidence on, its estimate is applied whole at every application
+  /// (no drift limit, no refusal of far turns: there is no heading to protect) until the
+  /// evidence reaches found_evidence (about 10 s of saturated motion); from then on it is a
+  /// found heading like any other.
+  double found_evidence = 10.0;
   /// Sensors aligned from a horizontal site normal in the N-pose are refined by the same fit:
   /// only when it disagrees by more than refine_dead_band_deg (the fit's own bias from the body
   /// model's joint centres) and by at most refine_max_deg in all (a strap tilted off its
@@ -78,6 +84,8 @@ class HeadingFromMotion {
   /// Segment s's fit has less than settle_evidence, and what it has agrees with itself (the
   /// resultant is at least settle_coherence of the evidence).
   bool settling(int segment) const;
+  /// Segment s's fit's evidence (0 when it is not fitted).
+  double evidence(int segment) const;
   /// The caller turned the segment's alignment by yaw_rad: the fit continues in the new frame.
   void applied(int segment, double yaw_rad);
   /// Segment s's evidence is dropped and its fit starts over against `reference` (the

@@ -34,9 +34,13 @@ class HingeHeading {
   explicit HingeHeading(HingeHeadingOptions o = {}) : opt_(o) {}
 
   /// One sample: the hinge's axis seen from the upper and from the lower segment, each in the
-  /// earth frame as that segment is aligned now; dt_s since the last sample. Never allocates.
+  /// earth frame as that segment is aligned now; dt_s since the last sample. refuse_far false:
+  /// any error is followed (a segment's lost heading is being found: there is none to
+  /// protect). Never allocates.
   void add(const Eigen::Vector3d& axis_earth_upper, const Eigen::Vector3d& axis_earth_lower,
-           double dt_s);
+           double dt_s, bool refuse_far = true);
+  /// Seconds followed since reset, each weighted as its error was (a horizontal axis: 1).
+  double followed_s() const { return followed_s_; }
   /// Whether the caller should take the yaw now, at t_ns (at 10 Hz: pending_yaw.hpp).
   bool due(int64_t t_ns) { return pending_.due(t_ns); }
   /// The yaw by which the lower segment's heading should turn (relative to the upper's) since
@@ -51,6 +55,7 @@ class HingeHeading {
   HingeHeadingOptions opt_;
   PendingYaw pending_;
   int refused_ = 0;
+  double followed_s_ = 0;
 };
 
 }  // namespace mocap::rig

@@ -54,6 +54,11 @@ struct AccuracyOptions {
   bool use_mag = true;
   /// Pose frames per second (0: one per sample time, as the sensors sample together).
   double frame_rate_hz = 0;
+  /// A dropout: the sensor on this segment sends nothing (a radio drop, a tracker rebooting)
+  /// for dropout_s from dropout_start_s into the evaluated motion, while the performer moves on;
+  /// both the tracker and its filter alone miss those samples. -1: none.
+  int dropout_segment = -1;
+  double dropout_start_s = 0, dropout_s = 0;
 };
 
 struct AccuracyResult {
@@ -80,6 +85,10 @@ struct AccuracyResult {
   /// estimate lets a correction of one segment move the others' figures).
   std::array<double, kSegmentCount> metric_segment_alone_g_deg{};
   double metric_mean_deg = 0, alone_mean_deg = 0;
+  /// With a dropout: the RMS of the dropped segment's joint error (to its parent; the root's:
+  /// the torso's joint) before the dropout, and from 5 s after its end to the end of the motion
+  /// (how well its heading was found again), degrees; -1 without such frames.
+  double dropout_joint_after_deg = -1, dropout_joint_before_deg = -1;
   /// Per segment with a sensor, the largest turn between two evaluated frames beyond its
   /// sensor's filter alone's turn over them: a correction applied in one frame shows here as a
   /// snap (degrees).
