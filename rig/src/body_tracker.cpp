@@ -301,7 +301,7 @@ void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, doub
   const Calibration& c = align_.calibration();
   const int up = skeleton_.rig().sensor_for_segment[h.upper];
   // A lost heading of either segment is found by the hinge: followed whatever its error, by
-  // that segment alone, until it was followed found_after_s (in horizontal-axis seconds).
+  // that segment alone, for kHingeFoundAfterS.
   const int lost_seg = au.heading_lost ? h.upper : al.heading_lost ? h.lower : -1;
   h.heading.add(c.segment_from_sensor(h.upper, q_earth_sensor(up)) * Eigen::Vector3d::UnitY(),
                 c.segment_from_sensor(h.lower, q) * Eigen::Vector3d::UnitY(), dt_s, lost_seg < 0);
@@ -311,9 +311,8 @@ void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, doub
     align_.turn_heading(lost_seg, lost_seg == h.lower ? yaw : -yaw, AlignSource::joint,
                         align_.segment(lost_seg).heading_sigma_deg);
     if (h.heading.followed_s() >= kHingeFoundAfterS) {
-      align_.regain_heading(lost_seg);
-      heading_found_[lost_seg] = true;
-      heading_.restart(lost_seg, heading_.reference(lost_seg));  // its evidence: the lost frame
+      // Its own fit, if it has one, took its evidence in the lost frame: it starts over.
+      heading_.restart(lost_seg, heading_.reference(lost_seg));
       found_again(lost_seg);
     }
     return;
@@ -533,7 +532,6 @@ void BodyTracker::start_heading_from_motion() {
   refine_.fill(false);
   turned_rad_.fill(0);
   refit_heading_only_.fill(false);
-  refine_after_found_.fill(false);
   root_witness_ = witness_prev_ref_ = -1;
   if (opt_.heading_from_motion.refine_max_deg > 0 &&
       opt_.calibration.heading == HeadingSource::mount_normals)
@@ -605,7 +603,6 @@ void BodyTracker::lose_heading(int s) {
   if (!a.aligned || !a.own_frame || a.heading_lost) return;
   align_.lose_heading(s);
   refit_heading_only_[s] = true;
-  refine_after_found_[s] = refine_after_found_[s] || refine_[s];
   refine_[s] = false;
   turned_rad_[s] = 0;
   heading_found_[s] = false;
@@ -632,6 +629,8 @@ void BodyTracker::lose_heading(int s) {
 }
 
 void BodyTracker::found_again(int s) {
+  align_.regain_heading(s);
+  heading_found_[s] = true;
   for (int t = 0; t < kSegmentCount; ++t) {
     if (t == s || heading_.reference(t) != s) continue;
     const int ref = t == root_witness_ ? witness_prev_ref_ : s;
@@ -670,14 +669,7 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
       align_.turn_heading(lost_seg, witness ? -yaw : yaw, AlignSource::joint,
                           align_.segment(lost_seg).heading_sigma_deg);
       heading_.applied(s, yaw);
-      if (evidence >= opt_.heading_from_motion.found_evidence) {
-        align_.regain_heading(lost_seg);
-        heading_found_[lost_seg] = true;
-        // A refined segment is refined again within its band about the heading found (the
-        // fit's own bias from the model's joint centres is the band's business, not a drift).
-        refine_[lost_seg] = refine_after_found_[lost_seg];
-        found_again(lost_seg);
-      }
+      if (evidence >= opt_.heading_from_motion.found_evidence) found_again(lost_seg);
       continue;
     }
     if (!heading_.estimate(s, yaw)) continue;

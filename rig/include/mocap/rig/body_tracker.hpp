@@ -198,11 +198,10 @@ class BodyTracker {
   /// Per segment: aligned from its own site normal and refined from motion within a band, and
   /// how far it has been turned so far, rad.
   std::array<bool, kSegmentCount> refine_{};
+  std::array<double, kSegmentCount> turned_rad_{};
   /// Per segment: its heading was lost since the calibration; the fit turns its heading alone
   /// (the mounting is known), not its facing.
   std::array<bool, kSegmentCount> refit_heading_only_{};
-  /// Per segment: refined before its heading was lost (refined again once it is found).
-  std::array<bool, kSegmentCount> refine_after_found_{};
   /// Segment s's sensor lost its own heading frame (heading_lost_after_s): marked lost, fitted
   /// afresh against the nearest known segment above it (or, for the root, a child fitted
   /// against it), its joint holds paused until it is found.
@@ -212,10 +211,10 @@ class BodyTracker {
   /// The lost root's witness: a child whose fit against the root turns the root (the child's
   /// yaw onto it, the other way round), and that child's reference before (-1: none).
   int root_witness_ = -1, witness_prev_ref_ = -1;
-  /// Segment s's heading was found again: the fits against it, whose evidence was taken in its
-  /// lost frame, start over.
+  /// Segment s's heading was found again: marked found (no longer refined within a band: its
+  /// heading is the one found); the fits against it, whose evidence was taken in its lost
+  /// frame, start over.
   void found_again(int s);
-  std::array<double, kSegmentCount> turned_rad_{};
   /// The sensor's orientation as its segment uses it (step 3), from the filter's output o.
   Eigen::Quaterniond q_earth_sensor(int i, const FilterOutput& o) const;
   SensorHealth sensor_health(int i, const FilterOutput& o) const;
