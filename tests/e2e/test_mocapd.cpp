@@ -338,6 +338,8 @@ TEST(Mocapd, DemoCalibratesItselfAndStandsUpright) {
     EXPECT_LT(s["mounting"]["sigma_deg"].get<double>(), 90) << s.dump();
     EXPECT_TRUE(s["alignment_heading"].contains("rejected_turns")) << s.dump();
     EXPECT_TRUE(s["alignment_heading"].contains("corrected_turns")) << s.dump();
+    EXPECT_TRUE(s["alignment_heading"]["lost"].is_boolean()) << s.dump();  // a dropout's
+    EXPECT_TRUE(s["alignment_heading"]["lost_count"].is_number()) << s.dump();
   }
   // A mounting calibration is taken and says what to do.
   {
