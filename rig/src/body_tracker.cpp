@@ -410,6 +410,12 @@ void BodyTracker::reset_heading() {
     have[s] = skeleton_.sensor_live(s);
   }
   align_.reset_heading(q_es, have);
+  // A reset answers a lost heading: found, its fit's evidence (taken in the lost frame) dropped.
+  for (int s = 0; s < kSegmentCount; ++s)
+    if (have[s] && lost(s)) {
+      heading_.restart(s, heading_.reference(s));
+      found_again(s);
+    }
   snap_alignment_ = true;
   publish_alignment();
 }
