@@ -257,7 +257,9 @@ TEST(Clients, FdExhaustionNeitherSpinsNorSilencesControl) {
     ::close(fd);
   // Once the clients leave, new ones are served.
   StreamClient reader(port);
-  EXPECT_TRUE(wait_until([&] { return reader.lines() > 0; }, 10s));
+  // (Failed once in CI under ASan, not reproduced since: the log says what the server saw.)
+  EXPECT_TRUE(wait_until([&] { return reader.lines() > 0; }, 10s))
+      << d.call("status", 5000).dump() << d.log_text();
   std::printf(
       "[figures] fd limit reached with 120 stream clients: daemon CPU %.0f %% of a core; "
       "status answered\n",
