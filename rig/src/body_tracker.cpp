@@ -288,10 +288,10 @@ bool BodyTracker::hinge_holds(const Hinge& h) const {
              kCosHingeAgree;
 }
 
-const BodyTracker::Hinge* BodyTracker::finding_hinge(int s) const {
+bool BodyTracker::found_by_hinge(int s) const {
   for (const Hinge& h : hinges_)
-    if ((h.upper == s || h.lower == s) && lost(s) && hinge_holds(h)) return &h;
-  return nullptr;
+    if ((h.upper == s || h.lower == s) && lost(s) && hinge_holds(h)) return true;
+  return false;
 }
 
 void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s,
@@ -537,7 +537,6 @@ void BodyTracker::start_heading_from_motion() {
   // acceleration from the torso's sensor is off.
   refine_.fill(false);
   turned_rad_.fill(0);
-  refit_heading_only_.fill(false);
   root_witness_ = witness_prev_ref_ = -1;
   if (opt_.heading_from_motion.refine_max_deg > 0 &&
       opt_.calibration.heading == HeadingSource::mount_normals)
@@ -608,7 +607,6 @@ void BodyTracker::lose_heading(int s) {
   const SegmentAlignment& a = align_.segment(s);
   if (!a.aligned || !a.own_frame || a.heading_lost) return;
   align_.lose_heading(s);
-  refit_heading_only_[s] = true;
   refine_[s] = false;
   turned_rad_[s] = 0;
   heading_found_[s] = false;
@@ -667,7 +665,7 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
     // applied at once and then held to the drift limit, locked on wrong (CMU 01_08: the
     // forearm's first estimate 150 deg, the evidence after it 99 deg more, refused).
     const int lost_seg = witness ? ref : lost(s) ? s : -1;
-    if (lost_seg >= 0 && finding_hinge(lost_seg)) continue;  // its hinge finds it
+    if (lost_seg >= 0 && found_by_hinge(lost_seg)) continue;  // its hinge finds it
     if (lost_seg >= 0) {
       const double evidence = heading_.evidence(s);
       if (evidence < opt_.heading_from_motion.settle_evidence || !heading_.estimate(s, yaw))
@@ -711,9 +709,10 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
       if (std::abs(yaw) < 1e-9) continue;
     }
     heading_found_[s] = true;
-    // The sensor's frame turns by yaw: after a lost heading its heading alone (the mounting is
-    // known), else its mounting keeps the segment's calibration pose (its facing was sought).
-    if (refit_heading_only_[s])
+    // The sensor's frame turns by yaw: once its heading was lost since the calibration, its
+    // heading alone (the mounting is known), else its mounting keeps the segment's calibration
+    // pose (its facing was sought).
+    if (align_.segment(s).lost_headings > 0)
       align_.turn_heading(s, yaw, AlignSource::joint, align_.segment(s).heading_sigma_deg);
     else
       align_.realign(s, yaw, AlignSource::joint, align_.segment(s).heading_sigma_deg);

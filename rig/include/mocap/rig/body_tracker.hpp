@@ -199,9 +199,6 @@ class BodyTracker {
   /// how far it has been turned so far, rad.
   std::array<bool, kSegmentCount> refine_{};
   std::array<double, kSegmentCount> turned_rad_{};
-  /// Per segment: its heading was lost since the calibration; the fit turns its heading alone
-  /// (the mounting is known), not its facing.
-  std::array<bool, kSegmentCount> refit_heading_only_{};
   /// Segment s's sensor lost its own heading frame (heading_lost_after_s): marked lost, fitted
   /// afresh against the nearest known segment above it (or, for the root, a child fitted
   /// against it), its joint holds paused until it is found.
@@ -253,8 +250,8 @@ class BodyTracker {
   /// The hinge's hold can act: both segments aligned in frames of their own, the axes known
   /// and on the segments' left axes, at most one of them lost.
   bool hinge_holds(const Hinge& h) const;
-  /// A hinge whose hold finds segment s's lost heading (nullptr: none; its fit does).
-  const Hinge* finding_hinge(int s) const;
+  /// Segment s's heading is lost and its knee's hinge hold finds it (else its fit does).
+  bool found_by_hinge(int s) const;
   std::array<Hinge, 2> hinges_;
   /// The running estimates' far answers: refused, or a wrong first answer corrected.
   TurnGuard turn_guard_;
