@@ -252,16 +252,10 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
   const HingeAxisEstimator& est = h.axis;
   const int upper = h.upper, lower = h.lower;
   // A real knee's axis is within a few degrees of the segment's lateral axis; the sign of each
-  // axis must be clear, and no other choice of signs nearly as good: an early solve from
-  // little flexion had its thigh's sign the wrong way with a margin of 0.11 (03_03 after an
-  // N-pose alone: the thigh 180 deg off, then held by the rejection of far turns), the right
-  // ones 0.75-0.89 (the same clip later, the real qmt run).
+  // axis must be clear, and no other choice of signs nearly as good (a wrong sign turns the
+  // segment 180 deg, then held by the rejection of far turns).
   constexpr double kModelSigmaDeg = 5.0;
-  constexpr double kMinSignAgreement = 0.8;
-  constexpr double kMinSignMargin = 0.5;
-  if (!align_.has_capture() || est.sign_agreement() < kMinSignAgreement ||
-      est.sign_margin() < kMinSignMargin)
-    return;
+  if (!align_.has_capture() || !est.signs_sure()) return;
   std::array<Facing, kSegmentCount> f{};
   const PoseCapture& c = align_.capture();
   const double sigma = est.sigma_deg();

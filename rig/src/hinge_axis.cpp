@@ -52,7 +52,7 @@ void HingeAxisEstimator::reset(int64_t t_ns) {
   relative_sign_known_ = false;
   sum_.setZero();
   weight_ = 0;
-  known_ = updated_ = false;
+  known_ = updated_ = rows_on_ = false;
   j1_ = j2_ = Eigen::Vector3d::UnitY();
   sigma_deg_ = 180;
   sign_agreement_ = 0;
@@ -128,12 +128,28 @@ void HingeAxisEstimator::solve() {
   if (cov.block<3, 3>(0, 0).trace() < kMinEvidence * 0.5 ||
       cov.block<3, 3>(3, 3).trace() < kMinEvidence * 0.5)
     return;
-  const Eigen::Matrix<double, 6, 6> whole = normal_ + horizontal_rows() + prior_;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(whole);
-  const Eigen::Matrix<double, 6, 1> x = es.eigenvectors().col(0);
-  const double n1 = x.head<3>().norm(), n2 = x.tail<3>().norm();
-  if (n1 < 0.3 || n2 < 0.3) return;  // one segment alone explains it: not a hinge's axis
-  Eigen::Vector3d j1 = x.head<3>() / n1, j2 = x.tail<3>() / n2;
+  // The axes and the windows' relative headings, alternated (horizontal_rows fits the headings
+  // to the axes as they are) kFitRounds times from the last answer.
+  Eigen::Matrix<double, 6, 6> whole;
+  Eigen::Vector3d j1, j2;
+  const Eigen::Vector3d j1_last = j1_, j2_last = j2_;
+  for (int round = 0; round < kFitRounds; ++round) {
+    whole = normal_ + horizontal_rows() + prior_;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(whole);
+    const Eigen::Matrix<double, 6, 1> x = es.eigenvectors().col(0);
+    const double n1 = x.head<3>().norm(), n2 = x.tail<3>().norm();
+    if (n1 < 0.3 || n2 < 0.3) {  // one segment alone explains it: not a hinge's axis
+      j1_ = j1_last;
+      j2_ = j2_last;
+      return;
+    }
+    // The eigenvector's sign is arbitrary: the axes keep theirs.
+    const double sign = x.head<3>().dot(j1_) < 0 ? -1.0 : 1.0;
+    j1 = sign * x.head<3>() / n1;
+    j2 = sign * x.tail<3>() / n2;
+    j1_ = j1;
+    j2_ = j2;
+  }
   // Residual per sample and the flattest curvature across each axis.
   Eigen::Matrix<double, 6, 1> xs;
   xs << j1, j2;
@@ -162,11 +178,14 @@ void HingeAxisEstimator::solve() {
                          kRelativeSignRatio * (std::min(flipped2, elevation2) + kFloor2);
   choose_signs(relative_sign_known_);
   known_ = updated_ = true;
+  rows_on_ = rows_on_ || signs_sure();
 }
 
 Eigen::Matrix<double, 6, 6> HingeAxisEstimator::horizontal_rows() {
   Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
-  if (!known_ || !relative_sign_known_) return h;  // the rows need the axes' relative sign
+  // The rows need the axes' relative sign, and axes as sure as the tracker takes (rows fitted
+  // to a first rough answer kept the axes near it for seconds).
+  if (!known_ || !relative_sign_known_ || !rows_on_) return h;
   const int n = static_cast<int>(windows_.size());
   for (int k = 1; k <= n; ++k) {  // oldest first: d_rad_ ends as the newest window's
     const Window& w = windows_[static_cast<size_t>((window_head_ + k) % n)];

@@ -22,7 +22,8 @@ void HingeHeading::add(const Eigen::Vector3d& y1, const Eigen::Vector3d& y2, dou
     ++refused_;
     return;
   }
-  pending_.add(weight * error_rad * std::min(dt_s / opt_.tau_s, 1.0));
+  const double tau_s = followed_s_ < opt_.start_s ? opt_.start_tau_s : opt_.tau_s;
+  pending_.add(weight * error_rad * std::min(dt_s / tau_s, 1.0));
   followed_s_ += weight * dt_s;
 }
 

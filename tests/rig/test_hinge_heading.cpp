@@ -86,7 +86,9 @@ TEST(HingeHeading, RefusesAnErrorNoDriftMakes) {
 // A lost heading being found: the same 90 deg is followed (at the time constant), and the time
 // followed is counted.
 TEST(HingeHeading, FollowsAnyErrorWhileALostHeadingIsFound) {
-  HingeHeading hold;
+  HingeHeadingOptions o;
+  o.start_s = 0;  // the steady time constant from the start (the start's own test below)
+  HingeHeading hold(o);
   double taken_rad = 0;
   for (int n = 0; n < 100; ++n) {
     hold.add(Eigen::Vector3d::UnitY(), turned_by_yaw(Eigen::Vector3d::UnitY(), 90 * kRadPerDeg),
@@ -100,6 +102,25 @@ TEST(HingeHeading, FollowsAnyErrorWhileALostHeadingIsFound) {
   EXPECT_NEAR(hold.followed_s(), 1.0, 1e-9);
   hold.reset();
   EXPECT_EQ(hold.followed_s(), 0.0);
+}
+
+TEST(HingeHeading, TakesOutTheCalibrationsErrorFasterAtTheStart) {
+  // A 10 deg error held for 1 s: taken at the start's 0.5 s time constant for the first 2 s
+  // followed (twice the error per second), then at 2 s (half of it per second).
+  HingeHeading hold;
+  const double error_rad = 10 * kRadPerDeg;
+  const auto follow = [&](double seconds) {
+    double taken_rad = 0;
+    for (int n = 0; n < static_cast<int>(std::lround(seconds * 100)); ++n) {
+      hold.add(Eigen::Vector3d::UnitY(), turned_by_yaw(Eigen::Vector3d::UnitY(), error_rad), 0.01);
+      taken_rad += hold.take();
+    }
+    return taken_rad;
+  };
+  EXPECT_NEAR(follow(2.0), -2 * 2 * error_rad, 1e-9);
+  EXPECT_NEAR(follow(1.0), -0.5 * error_rad, 1e-9);
+  hold.reset();  // starts over: fast again
+  EXPECT_NEAR(follow(1.0), -2 * error_rad, 1e-9);
 }
 
 TEST(HingeHeading, AVerticalAxisSaysNothing) {

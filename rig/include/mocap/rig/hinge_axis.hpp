@@ -57,7 +57,15 @@ namespace mocap::rig {
 
 class HingeAxisEstimator {
  public:
-  static constexpr double kSolveEveryS = 1.0;
+  /// Solved this often: the first answer comes within this of enough evidence (the real run's
+  /// lab straps put the site prior's facings 37-68 deg off until it comes).
+  static constexpr double kSolveEveryS = 0.25;
+  /// Rounds of the axes / relative headings alternation per solve (one round per solve left the
+  /// axes near a first rough answer for seconds: 20 deg off at 5 s in the pose prior's test).
+  /// The real run's knees (scripts/qmt-knees, with the hold's fast start): solved each 1 s, one
+  /// round 9.1 / 9.3 deg; each 0.25 s, one round 8.7 / 9.1, five rounds 8.6 / 9.0. kFitRounds
+  /// 6x6 eigensolves per knee each solve.
+  static constexpr int kFitRounds = 5;
   static constexpr double kSampleEveryS = 0.02;  ///< at most one sample per this
   static constexpr double kForgetS = 120.0;
   /// The two frames' relative heading is taken as constant over a window this long.
@@ -95,6 +103,15 @@ class HingeAxisEstimator {
   /// That share less the next best pair of signs' (how clearly the signs were chosen: early,
   /// with little flexion, several pairs stay on the flexing side).
   double sign_margin() const { return sign_margin_; }
+  /// The signs are sure enough to take the axes: the agreement and the margin over these. An
+  /// early solve from little flexion had its thigh's sign the wrong way with a margin of 0.11
+  /// (CMU 03_03 after an N-pose alone: the thigh 180 deg off), the right ones 0.75-0.89 (the
+  /// same clip later, the real qmt run). The horizontal rows join the fit from then on.
+  static constexpr double kSureSignAgreement = 0.8;
+  static constexpr double kSureSignMargin = 0.5;
+  bool signs_sure() const {
+    return sign_agreement_ >= kSureSignAgreement && sign_margin_ >= kSureSignMargin;
+  }
   /// The two sensors' frames' relative heading, rad: q1 axis1 = Rz(this) q2 axis2 (once known).
   double relative_heading_rad() const { return d_rad_; }
 
@@ -136,6 +153,7 @@ class HingeAxisEstimator {
   bool relative_sign_known_ = false;
   double weight_ = 0;
   bool known_ = false, updated_ = false;
+  bool rows_on_ = false;  ///< the signs have been sure since the reset: horizontal rows join
   Eigen::Vector3d j1_ = Eigen::Vector3d::UnitY(), j2_ = Eigen::Vector3d::UnitY();
   double sigma_deg_ = 180, sign_agreement_ = 0, sign_margin_ = 0;
 };
