@@ -105,8 +105,8 @@ TEST(HingeHeading, FollowsAnyErrorWhileALostHeadingIsFound) {
 }
 
 TEST(HingeHeading, TakesOutTheCalibrationsErrorFasterAtTheStart) {
-  // A 10 deg error held for 1 s: taken at the start's 0.5 s time constant for the first 2 s
-  // followed (twice the error per second), then at 2 s (half of it per second).
+  // A 10 deg error held: taken at the start's 0.5 s time constant for the first 2 s followed
+  // (twice the error per second), then at 2 s (half of it per second).
   HingeHeading hold;
   const double error_rad = 10 * kRadPerDeg;
   const auto follow = [&](double seconds) {
