@@ -156,8 +156,9 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   prev_t_ns_[k] = s.t_host_ns;
   const int seg = sensor.segment;
   if (seg < 0) return;
-  if (opt_.heading_lost_after_s > 0 && dt_s > opt_.heading_lost_after_s && heading_.active())
-    lose_heading(seg);  // found again in step 6
+  const bool may_lose = opt_.heading_lost_after_s > 0 && heading_.active();
+  const bool was_lost = lost(seg);
+  if (may_lose && dt_s > opt_.heading_lost_after_s) lose_heading(seg);  // found again in step 6
   // 3. The sensor's orientation as its segment uses it; a watched local field may turn the
   //    mounting once it turns (and the held heading with it, or let it go: no motion, so the
   //    published segment is eased onto it in step 7, as an alignment found while tracking).
@@ -172,6 +173,10 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
     watch.on_sample(o, dt_s);
   }
   const Eigen::Quaterniond q = q_earth_sensor(i, o);
+  if (may_lose) {
+    if (lost(seg) && !was_lost) keep_joint_across_gap(seg, q);
+    keep_joint_above(seg, q);
+  }
   // 4. Calibration capture; when it completes, the calibration.
   if (capturer_.capturing()) {
     capturer_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
@@ -624,6 +629,36 @@ void BodyTracker::lose_heading(int s) {
     if (h.upper == s || h.lower == s) h.heading.reset();
   for (RangeJoint& r : ranges_)
     if (r.child == s || kSegmentParent[r.child] == s) r.heading.reset();
+}
+
+void BodyTracker::keep_joint_above(int s, const Eigen::Quaterniond& q) {
+  const RigMapping& rig = skeleton_.rig();
+  int above = kSegmentParent[s];
+  while (above >= 0 && !rig.tracked(above))
+    above = kSegmentParent[above];
+  joint_above_[s].above = -1;
+  if (above < 0 || lost(above) || !align_.segment(s).aligned || !align_.segment(above).aligned)
+    return;
+  const Calibration& c = align_.calibration();
+  const Eigen::Quaterniond q_above =
+      c.segment_from_sensor(above, q_earth_sensor(rig.sensor_for_segment[above]));
+  joint_above_[s] = {above, q_above.conjugate() * c.segment_from_sensor(s, q)};
+}
+
+void BodyTracker::keep_joint_across_gap(int s, const Eigen::Quaterniond& q) {
+  const JointAbove& j = joint_above_[s];
+  if (j.above < 0 || lost(j.above) || is_hinge(static_cast<Segment>(s))) return;
+  const Calibration& c = align_.calibration();
+  const Eigen::Quaterniond q_above =
+      c.segment_from_sensor(j.above, q_earth_sensor(skeleton_.rig().sensor_for_segment[j.above]));
+  // The turn about the vertical from where the segment is now to where the kept joint puts it
+  // (the filter's tilt is its own after the gap; the heading is what it missed).
+  const Eigen::Quaterniond d =
+      q_above * j.q_above_segment * c.segment_from_sensor(s, q).conjugate();
+  const double yaw_rad = wrap_angle_rad(2 * std::atan2(d.z(), d.w()));
+  if (!std::isfinite(yaw_rad)) return;
+  align_.turn_heading(s, yaw_rad, AlignSource::joint, align_.segment(s).heading_sigma_deg);
+  heading_.seed(s, opt_.heading_from_motion.gap_prior);
 }
 
 void BodyTracker::found_again(int s) {

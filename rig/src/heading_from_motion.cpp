@@ -20,6 +20,11 @@ void HeadingFromMotion::restart(int seg, int reference) {
   active_ = active_ || reference >= 0;
 }
 
+void HeadingFromMotion::seed(int seg, double weight) {
+  if (seg < 0 || seg >= kSegmentCount || fit_[seg].ref < 0 || !(weight > 0)) return;
+  fit_[seg].sum.x() += weight;
+}
+
 void HeadingFromMotion::add_reference(int seg, const Eigen::Vector3d& v, int64_t t_ns) {
   if (seg < 0 || seg >= kSegmentCount || fit_[seg].ref < 0 || !v.allFinite()) return;
   Fit& f = fit_[seg];
