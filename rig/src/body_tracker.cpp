@@ -173,10 +173,7 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
     watch.on_sample(o, dt_s);
   }
   const Eigen::Quaterniond q = q_earth_sensor(i, o);
-  if (may_lose) {
-    if (lost(seg) && !was_lost) keep_joint_across_gap(seg, q);
-    keep_joint_above(seg, q);
-  }
+  if (may_lose) keep_joint_above(seg, q, lost(seg) && !was_lost);
   // 4. Calibration capture; when it completes, the calibration.
   if (capturer_.capturing()) {
     capturer_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
@@ -234,6 +231,7 @@ void BodyTracker::finish_calibration() {
   align_ = next;
   snap_alignment_ = true;
   turn_guard_.reset();
+  joint_above_.fill({});  // kept under the old alignment
   for (LocalFieldWatch& w : field_watch_)
     w = LocalFieldWatch{};
   suspect_local_fields(*result_);
@@ -309,11 +307,7 @@ void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, doub
     const double yaw = h.heading.take();
     align_.turn_heading(lost_seg, lost_seg == h.lower ? yaw : -yaw, AlignSource::joint,
                         align_.segment(lost_seg).heading_sigma_deg);
-    if (h.heading.followed_s() >= kHingeFoundAfterS) {
-      // Its own fit, if it has one, took its evidence in the lost frame: it starts over.
-      heading_.restart(lost_seg, heading_.reference(lost_seg));
-      found_again(lost_seg);
-    }
+    if (h.heading.followed_s() >= kHingeFoundAfterS) found_again(lost_seg, true);
     return;
   }
   if (h.heading.take_refused() > 0) align_.reject_turn(h.lower);
@@ -398,6 +392,7 @@ void BodyTracker::set_calibration(const Calibration& c) {
   align_.load(c);
   snap_alignment_ = true;
   turn_guard_.reset();
+  joint_above_.fill({});
   publish_alignment();
 }
 
@@ -409,12 +404,10 @@ void BodyTracker::reset_heading() {
     have[s] = skeleton_.sensor_live(s);
   }
   align_.reset_heading(q_es, have);
-  // A reset answers a lost heading: found, its fit's evidence (taken in the lost frame) dropped.
+  joint_above_.fill({});
+  // A reset answers a lost heading.
   for (int s = 0; s < kSegmentCount; ++s)
-    if (have[s] && lost(s)) {
-      heading_.restart(s, heading_.reference(s));
-      found_again(s);
-    }
+    if (have[s] && lost(s)) found_again(s, true);
   snap_alignment_ = true;
   publish_alignment();
 }
@@ -631,37 +624,35 @@ void BodyTracker::lose_heading(int s) {
     if (r.child == s || kSegmentParent[r.child] == s) r.heading.reset();
 }
 
-void BodyTracker::keep_joint_above(int s, const Eigen::Quaterniond& q) {
+void BodyTracker::keep_joint_above(int s, const Eigen::Quaterniond& q, bool gap_ended) {
   const RigMapping& rig = skeleton_.rig();
   int above = kSegmentParent[s];
   while (above >= 0 && !rig.tracked(above))
     above = kSegmentParent[above];
-  joint_above_[s].above = -1;
-  if (above < 0 || lost(above) || !align_.segment(s).aligned || !align_.segment(above).aligned)
+  JointAbove& j = joint_above_[s];
+  if (above < 0 || lost(above) || !align_.segment(s).aligned || !align_.segment(above).aligned) {
+    j.above = -1;
     return;
+  }
   const Calibration& c = align_.calibration();
   const Eigen::Quaterniond q_above =
       c.segment_from_sensor(above, q_earth_sensor(rig.sensor_for_segment[above]));
-  joint_above_[s] = {above, q_above.conjugate() * c.segment_from_sensor(s, q)};
+  if (gap_ended && j.above == above && !is_hinge(static_cast<Segment>(s))) {
+    // The turn about the vertical from where the segment is now to where the kept joint puts
+    // it (the filter's tilt is its own after the gap; the heading is what it missed).
+    const Eigen::Quaterniond d =
+        q_above * j.q_above_segment * c.segment_from_sensor(s, q).conjugate();
+    const double yaw_rad = wrap_angle_rad(2 * std::atan2(d.z(), d.w()));
+    if (std::isfinite(yaw_rad)) {
+      align_.turn_heading(s, yaw_rad, AlignSource::joint, align_.segment(s).heading_sigma_deg);
+      heading_.seed(s, opt_.heading_from_motion.gap_prior);
+    }
+  }
+  j = {above, q_above.conjugate() * c.segment_from_sensor(s, q)};
 }
 
-void BodyTracker::keep_joint_across_gap(int s, const Eigen::Quaterniond& q) {
-  const JointAbove& j = joint_above_[s];
-  if (j.above < 0 || lost(j.above) || is_hinge(static_cast<Segment>(s))) return;
-  const Calibration& c = align_.calibration();
-  const Eigen::Quaterniond q_above =
-      c.segment_from_sensor(j.above, q_earth_sensor(skeleton_.rig().sensor_for_segment[j.above]));
-  // The turn about the vertical from where the segment is now to where the kept joint puts it
-  // (the filter's tilt is its own after the gap; the heading is what it missed).
-  const Eigen::Quaterniond d =
-      q_above * j.q_above_segment * c.segment_from_sensor(s, q).conjugate();
-  const double yaw_rad = wrap_angle_rad(2 * std::atan2(d.z(), d.w()));
-  if (!std::isfinite(yaw_rad)) return;
-  align_.turn_heading(s, yaw_rad, AlignSource::joint, align_.segment(s).heading_sigma_deg);
-  heading_.seed(s, opt_.heading_from_motion.gap_prior);
-}
-
-void BodyTracker::found_again(int s) {
+void BodyTracker::found_again(int s, bool restart_own_fit) {
+  if (restart_own_fit) heading_.restart(s, heading_.reference(s));
   align_.regain_heading(s);
   heading_found_[s] = true;
   for (int t = 0; t < kSegmentCount; ++t) {
@@ -702,7 +693,7 @@ void BodyTracker::apply_heading_from_motion(int64_t t_ns) {
       align_.turn_heading(lost_seg, witness ? -yaw : yaw, AlignSource::joint,
                           align_.segment(lost_seg).heading_sigma_deg);
       heading_.applied(s, yaw);
-      if (evidence >= opt_.heading_from_motion.found_evidence) found_again(lost_seg);
+      if (evidence >= opt_.heading_from_motion.found_evidence) found_again(lost_seg, false);
       continue;
     }
     if (!heading_.estimate(s, yaw)) continue;

@@ -171,7 +171,7 @@ TEST(RealMotion, SixDHeadingLostInADropoutIsFoundAgain) {
 }
 
 // A lost heading starts from the segment's rotation in the segment above as it was before the
-// gap (BodyTracker::keep_joint_across_gap), its fit's prior: the cases where the fit alone
+// gap (BodyTracker::keep_joint_above), its fit's prior: the cases where the fit alone
 // settled far off. Joint error after the gap without the prior: torso 59.5, foot 143.0, head
 // 98.9 deg (the head's neck joint is 20.3 before the gap: the neck is untracked); with it 4.8,
 // 9.2, 23.9.

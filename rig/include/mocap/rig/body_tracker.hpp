@@ -23,7 +23,7 @@
 //      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted; a
 //      sensor silent for heading_lost_after_s lost its heading (marked lost before step 3,
 //      and after it turned so that its rotation in the segment above is the one before the
-//      gap: keep_joint_across_gap) and is found again here, or by its knee's hinge hold in
+//      gap: keep_joint_above) and is found again here, or by its knee's hinge hold in
 //      step 5,
 //   7. the skeleton's input (orientation and flags);
 // and per frame the skeleton solve (each segment holds its sensor's newest orientation).
@@ -215,22 +215,23 @@ class BodyTracker {
   };
   std::array<JointAbove, kSegmentCount> joint_above_{};
   /// Keeps segment s's JointAbove from its sensor's orientation q (step 3's), where both
-  /// segments are aligned and the one above has its heading.
-  void keep_joint_above(int s, const Eigen::Quaterniond& q);
-  /// Segment s's heading was just lost (q: its sensor's first orientation after the gap):
-  /// turned so that its rotation in the segment above is the one before the gap (a ball
-  /// joint's changes little in a few seconds; the dropped sensor's filter missed the whole
-  /// turn), and that is its fit's prior (HeadingFromMotionOptions::gap_prior). Not across a
-  /// hinge: a knee or elbow flexes through a gap (the forearm after a 3 s dropout, mean /
-  /// worst: 6.9 / 15.9 deg without, 8.5 / 39.2 with; the shank is found by its hinge).
-  void keep_joint_across_gap(int s, const Eigen::Quaterniond& q);
+  /// segments are aligned and the one above has its heading (none kept across a new
+  /// calibration or heading reset). gap_ended: s's heading was just
+  /// lost (q is its first orientation after the gap): first turned so that its rotation in the
+  /// segment above is the one kept before the gap (a ball joint's changes little in a few
+  /// seconds; the dropped sensor's filter missed the whole turn), and that is its fit's prior
+  /// (HeadingFromMotionOptions::gap_prior). Not across a hinge: a knee or elbow flexes through a
+  /// gap (the forearm after a 3 s dropout, mean / worst: 6.9 / 15.9 deg without, 8.5 / 39.2
+  /// with; the shank is found by its hinge).
+  void keep_joint_above(int s, const Eigen::Quaterniond& q, bool gap_ended);
   /// The lost root's witness: a child whose fit against the root turns the root (the child's
   /// yaw onto it, the other way round), and that child's reference before (-1: none).
   int root_witness_ = -1, witness_prev_ref_ = -1;
   /// Segment s's heading was found again: marked found (no longer refined within a band: its
   /// heading is the one found); the fits against it, whose evidence was taken in its lost
-  /// frame, start over.
-  void found_again(int s);
+  /// frame, start over; restart_own_fit: its own fit too (found by something else: a hinge, a
+  /// reset).
+  void found_again(int s, bool restart_own_fit);
   /// The sensor's orientation as its segment uses it (step 3), from the filter's output o.
   Eigen::Quaterniond q_earth_sensor(int i, const FilterOutput& o) const;
   SensorHealth sensor_health(int i, const FilterOutput& o) const;

@@ -60,7 +60,7 @@ struct HeadingFromMotionOptions {
   /// found heading like any other.
   double found_evidence = 10.0;
   /// A lost heading's fit starts from the segment's rotation in the segment above as it was
-  /// before the gap (BodyTracker::keep_joint_across_gap), a prior worth this much of the
+  /// before the gap (BodyTracker::keep_joint_above), a prior worth this much of the
   /// resultant (not counted as evidence: settling and finding wait for motion). CMU 6D, a 3 s
   /// dropout at 4 s, 17 clips, the dropped segment's joint error after, mean / worst:
   /// torso 13.9 / 59.5 -> 7.6 / 22.0 deg, head 53.6 / 98.9 -> 31.6 / 59.9 (20.7 before the gap:
