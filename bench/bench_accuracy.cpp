@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -196,9 +197,11 @@ int run_accuracy(const AccuracyCommandOptions& args) {
   base.warmup = args.warmup;
   base.mounting_motion = args.mounting_motion == "on";
   if (!args.dropout.empty()) {
-    // SEGMENT:START:SECONDS
+    // SEGMENT:START:SECONDS (SEGMENT "all": every sensor)
     const auto a = args.dropout.find(':'), b = args.dropout.rfind(':');
-    const auto seg = segment_from_name(args.dropout.substr(0, a));
+    const std::string name = args.dropout.substr(0, a);
+    const bool all = name == "all";
+    const auto seg = all ? std::optional<Segment>(Segment::pelvis) : segment_from_name(name);
     char* end = nullptr;
     if (a != std::string::npos && b != a) {
       base.dropout_start_s = std::strtod(args.dropout.c_str() + a + 1, &end);
@@ -208,11 +211,11 @@ int run_accuracy(const AccuracyCommandOptions& args) {
     if (!seg || b == a || *end != 0 || base.dropout_start_s < 0 || base.dropout_s <= 0) {
       std::fprintf(stderr,
                    "mocap bench accuracy: --dropout '%s': expected SEGMENT:START_S:SECONDS (e.g. "
-                   "forearm_l:5:3)\n",
+                   "forearm_l:5:3, or all:5:3)\n",
                    args.dropout.c_str());
       return 2;
     }
-    base.dropout_segment = index(*seg);
+    base.dropout_segment = all ? sim::AccuracyOptions::kDropoutAll : index(*seg);
   }
   if (args.ideal) base.sensor = sim::SensorModelParams::ideal();
   if (!args.sensor_errors.empty()) {
@@ -327,7 +330,8 @@ void add_accuracy(CLI::App& bench, int& exit_code) {
       ->check(CLI::IsMember({"on", "off"}));
   c->add_option("--dropout", o->dropout,
                 "SEGMENT:START_S:SECONDS: that segment's sensor sends nothing for SECONDS from "
-                "START_S into the evaluated motion (a radio drop, a tracker rebooting)");
+                "START_S into the evaluated motion (a radio drop, a tracker rebooting); "
+                "SEGMENT all: every sensor (the receiver or the network dropped)");
   c->add_flag("--markdown", o->markdown, "also print a markdown table on stderr");
   c->callback([o, &exit_code] { exit_code = run_accuracy(*o); });
 }

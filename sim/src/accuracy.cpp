@@ -133,7 +133,9 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     const bool dropping =
         k * frame_s >= dropout_from_s && k * frame_s < dropout_from_s + o.dropout_s;
     for (ImuSample& s : samples) {
-      if (dropping && index(Performer::sensor_segment(s.sensor_id)) == o.dropout_segment) continue;
+      if (dropping && (o.dropout_segment == AccuracyOptions::kDropoutAll ||
+                       index(Performer::sensor_segment(s.sensor_id)) == o.dropout_segment))
+        continue;
       tracker.on_sample(s.sensor_id, s);
       ImuSample a = s;
       a.gyr_rad_s = a.gyr_rad_s.cwiseQuotient(tracker.sensor(s.sensor_id).gyr_scale);

@@ -56,7 +56,9 @@ struct AccuracyOptions {
   double frame_rate_hz = 0;
   /// A dropout: the sensor on this segment sends nothing (a radio drop, a tracker rebooting)
   /// for dropout_s from dropout_start_s into the evaluated motion, while the performer moves on;
-  /// both the tracker and its filter alone miss those samples. -1: none.
+  /// both the tracker and its filter alone miss those samples. -1: none; kDropoutAll: every
+  /// sensor (the receiver or the network dropped; no joint figures, the whole-body ones count).
+  static constexpr int kDropoutAll = kSegmentCount;
   int dropout_segment = -1;
   double dropout_start_s = 0, dropout_s = 0;
 };
