@@ -114,7 +114,9 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   PoseFrame frame;
   TruthFrame truth;
   std::array<double, kSegmentCount> joint_sq{}, seg_sq{};
-  // The dropped segment's joint to its parent; the root's, its joint with the torso.
+  // The dropped segment's joint to its parent; the root's, its joint with the torso; every
+  // joint when every sensor drops.
+  const bool drop_all = o.dropout_segment == AccuracyOptions::kDropoutAll;
   const int drop_joint = o.dropout_segment == 0 ? index(Segment::torso) : o.dropout_segment;
   double drop_before_sq = 0, drop_after_sq = 0;
   int drop_before_n = 0, drop_after_n = 0;
@@ -194,7 +196,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       if (s > 0) {
         const double e = angle_deg(skeleton.q_parent_segment()[s], truth.q_parent_segment[s]);
         joint_sq[s] += e * e;
-        if (o.dropout_segment >= 0 && s == drop_joint) {
+        if (o.dropout_segment >= 0 && (s == drop_joint || drop_all)) {
           const double since_s = k * frame_s - eval_start_s - o.dropout_start_s;
           if (since_s < 0) drop_before_sq += e * e, ++drop_before_n;
           if (since_s >= o.dropout_s + 5.0) drop_after_sq += e * e, ++drop_after_n;

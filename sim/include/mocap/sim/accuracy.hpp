@@ -57,7 +57,7 @@ struct AccuracyOptions {
   /// A dropout: the sensor on this segment sends nothing (a radio drop, a tracker rebooting)
   /// for dropout_s from dropout_start_s into the evaluated motion, while the performer moves on;
   /// both the tracker and its filter alone miss those samples. -1: none; kDropoutAll: every
-  /// sensor (the receiver or the network dropped; no joint figures, the whole-body ones count).
+  /// sensor (the receiver or the network dropped; the joint figures are over every joint).
   static constexpr int kDropoutAll = kSegmentCount;
   int dropout_segment = -1;
   double dropout_start_s = 0, dropout_s = 0;
@@ -88,8 +88,9 @@ struct AccuracyResult {
   std::array<double, kSegmentCount> metric_segment_alone_g_deg{};
   double metric_mean_deg = 0, alone_mean_deg = 0;
   /// With a dropout: the RMS of the dropped segment's joint error (to its parent; the root's:
-  /// the torso's joint) before the dropout, and from 5 s after its end to the end of the motion
-  /// (how well its heading was found again), degrees; -1 without such frames.
+  /// the torso's joint; kDropoutAll: over every joint) before the dropout, and from 5 s after
+  /// its end to the end of the motion (how well its heading was found again), degrees; -1
+  /// without such frames.
   double dropout_joint_after_deg = -1, dropout_joint_before_deg = -1;
   /// Per segment with a sensor, the largest turn between two evaluated frames beyond its
   /// sensor's filter alone's turn over them: a correction applied in one frame shows here as a
