@@ -215,15 +215,15 @@ class BodyTracker {
   };
   std::array<JointAbove, kSegmentCount> joint_above_{};
   /// Keeps segment s's JointAbove from its sensor's orientation q (step 3's), where both
-  /// segments are aligned and the one above has its heading (none kept across a new
-  /// calibration or heading reset). gap_ended: s's heading was just
-  /// lost (q is its first orientation after the gap): first turned so that its rotation in the
-  /// segment above is the one kept before the gap (a ball joint's changes little in a few
-  /// seconds; the dropped sensor's filter missed the whole turn), and that is its fit's prior
-  /// (HeadingFromMotionOptions::gap_prior), or, kept through an untracked segment (the head
-  /// through the neck: its fit is too weak), it is found so. Not across a hinge: a knee or elbow flexes through a
-  /// gap (the forearm after a 3 s dropout, mean / worst: 6.9 / 15.9 deg without, 8.5 / 39.2
-  /// with; the shank is found by its hinge).
+  /// segments are aligned and the one above has its heading (none kept across a new calibration
+  /// or heading reset). gap_ended: s's heading was just lost (q is its first orientation after
+  /// the gap): first turned so that its rotation in the segment above is the one kept before
+  /// the gap (a ball joint's changes little in a few seconds; the dropped sensor's filter missed
+  /// the whole turn), and that is its fit's prior (HeadingFromMotionOptions::gap_prior); kept
+  /// through an untracked segment (the head through the neck: its fit is too weak), it is found
+  /// so. Not across a hinge: a knee or elbow flexes through a gap (the forearm after a 3 s
+  /// dropout, mean / worst: 6.9 / 15.9 deg without, 8.5 / 39.2 with; the shank is found by its
+  /// hinge).
   void keep_joint_above(int s, const Eigen::Quaterniond& q, bool gap_ended);
   /// The lost root's witness: a child whose fit against the root turns the root (the child's
   /// yaw onto it, the other way round), and that child's reference before (-1: none).
