@@ -201,14 +201,14 @@ int run_accuracy(const AccuracyCommandOptions& args) {
     const auto a = args.dropout.find(':'), b = args.dropout.rfind(':');
     const std::string name = args.dropout.substr(0, a);
     const bool all = name == "all";
-    const auto seg = all ? std::optional<Segment>(Segment::pelvis) : segment_from_name(name);
+    const auto seg = segment_from_name(name);
     char* end = nullptr;
     if (a != std::string::npos && b != a) {
       base.dropout_start_s = std::strtod(args.dropout.c_str() + a + 1, &end);
       if (end == args.dropout.c_str() + b)
         base.dropout_s = std::strtod(args.dropout.c_str() + b + 1, &end);
     }
-    if (!seg || b == a || *end != 0 || base.dropout_start_s < 0 || base.dropout_s <= 0) {
+    if ((!all && !seg) || b == a || *end != 0 || base.dropout_start_s < 0 || base.dropout_s <= 0) {
       std::fprintf(stderr,
                    "mocap bench accuracy: --dropout '%s': expected SEGMENT:START_S:SECONDS (e.g. "
                    "forearm_l:5:3, or all:5:3)\n",

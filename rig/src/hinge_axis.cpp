@@ -161,8 +161,6 @@ void HingeAxisEstimator::solve() {
   const double var = residual2 + kResidualFloor * kResidualFloor;
   sigma_deg_ = std::min(
       180.0, std::sqrt(var / (std::max(std::min(k1, k2), 1e-12) * independent)) * kDegPerRad);
-  j1_ = j1;
-  j2_ = j2;
   // The fit fixes the axes' relative sign where the axis' elevation varied: one axis flipped
   // alone then fits clearly worse. Where it stayed level it fits as well, and only the
   // flexing side can tell.

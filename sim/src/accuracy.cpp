@@ -135,8 +135,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     const bool dropping =
         k * frame_s >= dropout_from_s && k * frame_s < dropout_from_s + o.dropout_s;
     for (ImuSample& s : samples) {
-      if (dropping && (o.dropout_segment == AccuracyOptions::kDropoutAll ||
-                       index(Performer::sensor_segment(s.sensor_id)) == o.dropout_segment))
+      if (dropping &&
+          (drop_all || index(Performer::sensor_segment(s.sensor_id)) == o.dropout_segment))
         continue;
       tracker.on_sample(s.sensor_id, s);
       ImuSample a = s;

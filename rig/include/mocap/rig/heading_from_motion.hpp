@@ -63,8 +63,8 @@ struct HeadingFromMotionOptions {
   /// before the gap (BodyTracker::keep_joint_above), a prior worth this much of the
   /// resultant (not counted as evidence: settling and finding wait for motion). CMU 6D, a 3 s
   /// dropout at 4 s, 17 clips, the dropped segment's joint error after, mean / worst:
-  /// torso 13.9 / 59.5 -> 7.6 / 22.0 deg, head 53.6 / 98.9 -> 31.6 / 59.9 (20.7 before the gap:
-  /// the untracked neck), foot 25.3 / 143.0 -> 12.5 / 98.1; 4 kept the torso better (6.8 /
+  /// torso 13.9 / 59.5 -> 7.6 / 22.0 deg, foot 25.3 / 143.0 -> 12.5 / 98.1 (the head, kept
+  /// through the untracked neck, is found at once instead); 4 kept the torso better (6.8 /
   /// 16.5) and the upper arm worse (15.5 / 59.4 against 9.4 / 34.5), counted as evidence
   /// worse (the foot 13.8 / 122.5: found with the prior's share).
   double gap_prior = 2.0;
