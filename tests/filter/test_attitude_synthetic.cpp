@@ -181,6 +181,44 @@ TEST(AttitudeSynthetic, GapsUseTimestamps) {
   EXPECT_EQ(r.filter.counters().bad_time, 0u);
 }
 
+// The 6D heading error's change across a gap of samples [from_s, to_s) in a level sensor
+// turning about the vertical at gyr_z(t): the rotation the filter missed or made up.
+double heading_change_across_gap_deg(const std::function<double(double)>& gyr_z, double from_s,
+                                     double to_s) {
+  SynthConfig c;
+  c.duration_s = to_s + 1;
+  c.gyr_noise = 0;
+  c.gyr_true = [&](double t) -> Eigen::Vector3d { return Eigen::Vector3d(0, 0, gyr_z(t)); };
+  const SynthStream s = make_stream(c);
+  AttitudeFilter f;
+  Eigen::Quaterniond e_before = Eigen::Quaterniond::Identity();
+  for (size_t i = 0; i < s.samples.size(); ++i) {
+    const double t = s.samples[i].t_host_ns * 1e-9;
+    if (t >= from_s && t < to_s) continue;
+    f.update(s.samples[i]);
+    const Eigen::Quaterniond e = f.output().q_earth_sensor_6d * s.truth[i].conjugate();
+    if (t < from_s) e_before = e;
+    if (t >= to_s) return angle_deg(e, e_before);
+  }
+  return -1;
+}
+
+// A gap longer than kMaxGap_s (0.25 s) is not integrated: holding the newest rate over it
+// made up a turn. The sensor turns back and forth, 0.5 s a period, and misses one period from
+// its fastest turn on: it ends where it began but for the period before the gap (1.7 deg), and
+// the filter turns nothing (holding 3 rad/s for 0.25 s made up 43 deg).
+TEST(AttitudeSynthetic, AGapTooLongToBridgeIsNotGuessed) {
+  const auto gyr_z = [](double t) { return 3.0 * std::cos(2 * kPi * t / 0.5); };
+  EXPECT_LT(heading_change_across_gap_deg(gyr_z, 10.0, 10.5), 3.0);
+}
+
+// A shorter gap takes the rate as changing in a straight line between the samples either
+// side: exact for a rate ramping 10 rad/s^2 (holding the newest rate: 6 deg too far).
+TEST(AttitudeSynthetic, AShortGapTakesTheMeanRateOfItsEnds) {
+  const auto gyr_z = [](double t) { return std::clamp(10.0 * (t - 10.0), 0.0, 3.0); };
+  EXPECT_LT(heading_change_across_gap_deg(gyr_z, 10.06, 10.2), 1.0);
+}
+
 class Rates : public ::testing::TestWithParam<double> {};
 
 TEST_P(Rates, SameAccuracyFrom25HzTo2kHz) {

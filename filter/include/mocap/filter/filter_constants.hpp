@@ -51,7 +51,7 @@ inline constexpr double kMagLatencyMinRate_deg_s = 30.0;  ///< deg/s, below: the
 inline constexpr double kMagLatencyMax_s = 0.05;          ///< s, largest latency compensated
 
 // Input bounds: what is integrated or rejected (counted in FilterCounters).
-inline constexpr double kMaxGap_s = 0.25;      ///< s, longer gaps integrate the gyro this long
+inline constexpr double kMaxGap_s = 0.25;      ///< s, longer gaps are not integrated
 inline constexpr double kMaxGyr_rad_s = 70.0;  ///< rad/s, rejected above (about 4000 deg/s)
 inline constexpr double kMaxAcc_m_s2 = 500.0;  ///< m/s^2, rejected above (about 50 g)
 inline constexpr double kMaxMag_uT = 10000.0;  ///< uT, rejected above

@@ -83,9 +83,9 @@ struct TrackerOptions {
   /// Length of the mounting motion's window after its N-pose capture, seconds.
   double mounting_motion_s = 5.0;
   /// A sensor with a heading frame of its own (6D) silent this long lost its heading: its
-  /// filter integrates kMaxGap_s of a gap and a tracker that rebooted starts a new frame, so
-  /// whatever the body turned meanwhile is missing. The heading is found again from motion
-  /// against its neighbours (step 6), as a heading never known; 0 disables. Seconds.
+  /// filter integrates nothing over a gap over kMaxGap_s and a tracker that rebooted starts a new
+  /// frame, so whatever the body turned meanwhile is missing. The heading is found again from
+  /// motion against its neighbours (step 6), as a heading never known; 0 disables. Seconds.
   double heading_lost_after_s = 1.0;
 };
 
