@@ -158,7 +158,9 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   if (seg < 0) return;
   const bool may_lose = opt_.heading_lost_after_s > 0 && heading_.active();
   const bool was_lost = lost(seg);
-  if (may_lose && dt_s > opt_.heading_lost_after_s) lose_heading(seg);  // found again in step 6
+  if ((may_lose && dt_s > opt_.heading_lost_after_s) ||
+      ((s.flags & kFlagDeviceRestarted) && heading_.active()))
+    lose_heading(seg);  // found again in step 6
   // 3. The sensor's orientation as its segment uses it; a watched local field may turn the
   //    mounting once it turns (and the held heading with it, or let it go: no motion, so the
   //    published segment is eased onto it in step 7, as an alignment found while tracking).

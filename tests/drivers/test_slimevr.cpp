@@ -159,6 +159,41 @@ TEST(SlimeVrDecoder, MapsMacAndSensorIdToTheRigSensorAndCarriesTheOrientation) {
   EXPECT_EQ(s[1].seq, 5u);
 }
 
+// A tracker that reboots starts its orientation in a new frame: its first sample after says so
+// (kFlagDeviceRestarted; the body tracker then finds its heading again), whether it comes back
+// from the same address (its packet count begins again) or another; a handshake recorded again
+// in a take (the device re-records each board's every 250 ms) is no reboot.
+TEST(SlimeVrDecoder, ATrackerThatRebootedSaysSoInItsFirstSample) {
+  auto dec = test::slimevr_decoder("slimevr", "02:5E:00:00:00:01/0=0");
+  test::CollectSink sink;
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()));
+  int64_t t_ns = 0;
+  const auto send = [&](const std::vector<uint8_t>& d, uint16_t port = 40000) {
+    dec->feed(test::slimevr_record(d, 0x7f000001, port), t_ns += 10'000'000, sink);
+  };
+  const auto rotations = [&](uint64_t from, uint64_t to, uint16_t port = 40000) {
+    for (uint64_t n = from; n <= to; ++n) {
+      std::vector<uint8_t> d;
+      slime_sim::rotation(n, 0, q, d);
+      send(d, port);
+    }
+  };
+  std::vector<uint8_t> hello;
+  slime_sim::handshake(mac_of("02:5E:00:00:00:01"), hello);
+  send(hello);
+  rotations(1, 5);
+  send(hello);  // recorded again: the count goes on
+  rotations(6, 8);
+  send(hello);  // rebooted: the count begins again
+  rotations(1, 3);
+  send(hello, 40001);  // rebooted, back from another port
+  rotations(4, 5, 40001);
+  const auto s = sink.snapshot();
+  ASSERT_EQ(s.size(), 13u);
+  for (std::size_t i = 0; i < s.size(); ++i)
+    EXPECT_EQ((s[i].flags & kFlagDeviceRestarted) != 0, i == 8 || i == 11) << "sample " << i;
+}
+
 TEST(SlimeVrDecoder, ASensorWithoutAMacIsRefusedWithAClearError) {
   DeviceSpec spec;
   spec.name = "hip";

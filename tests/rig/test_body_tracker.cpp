@@ -163,11 +163,12 @@ void six_d_calibration(bool rig_use_mag) {
 }
 
 // A 6D sensor silent for over heading_lost_after_s (a radio drop, a tracker rebooting) comes
-// back with its heading marked lost (counted), a shorter gap does not, a 9D sensor never (its
+// back with its heading marked lost (counted), a shorter gap does not unless its device says it
+// restarted (kFlagDeviceRestarted: a tracker that rebooted quickly), a 9D sensor never (its
 // magnetometer brings its heading back); a heading reset answers it.
 TEST(BodyTracker, ASixDHeadingLostInADropoutIsMarkedAndAHeadingResetAnswersIt) {
   for (const bool use_mag : {false, true})
-    for (const double gap_s : {0.5, 1.5}) {
+    for (const auto [gap_s, restarted] : {std::pair{0.5, false}, {1.5, false}, {0.5, true}}) {
       Rig rig;
       BodyTracker tracker = mount_normals_tracker(rig, use_mag);
       tracker.start_calibration(CalibrationPose::npose, 1'500'000'000);
@@ -177,16 +178,19 @@ TEST(BodyTracker, ASixDHeadingLostInADropoutIsMarkedAndAHeadingResetAnswersIt) {
         const int64_t t = static_cast<int64_t>(k) * 10'000'000;
         for (int i = 0; i < 3; ++i) {
           if (i == 1 && k * 0.01 >= 3.0 && k * 0.01 < 3.0 + gap_s) continue;  // thigh silent
-          tracker.on_sample(i,
-                            sample(i, rig.q_earth_sensor0[i], Eigen::Vector3d::Zero(), t, use_mag));
+          ImuSample s = sample(i, rig.q_earth_sensor0[i], Eigen::Vector3d::Zero(), t, use_mag);
+          if (i == 1 && restarted && k == static_cast<int>(std::lround((3.0 + gap_s) * 100)))
+            s.flags |= kFlagDeviceRestarted;
+          tracker.on_sample(i, s);
         }
         if (auto res = tracker.take_calibration_result()) {
           ASSERT_TRUE(res->ok()) << res->message;
         }
         lost_seen = lost_seen || tracker.alignment().segment(thigh).heading_lost;
       }
-      const bool expect_lost = !use_mag && gap_s > 1.0;
-      const std::string what = std::string(use_mag ? "9D" : "6D") + " gap " + std::to_string(gap_s);
+      const bool expect_lost = !use_mag && (gap_s > 1.0 || restarted);
+      const std::string what = std::string(use_mag ? "9D" : "6D") + " gap " +
+                               std::to_string(gap_s) + (restarted ? " restarted" : "");
       EXPECT_EQ(lost_seen, expect_lost) << what;
       EXPECT_EQ(tracker.alignment().segment(thigh).lost_headings, expect_lost ? 1u : 0u) << what;
       // Standing still, nothing finds it from motion: still lost, until a heading reset.

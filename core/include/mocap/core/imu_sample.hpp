@@ -27,6 +27,9 @@ enum SampleFlag : uint8_t {
   kFlagInterpolated = 1u << 4,  ///< filled in (e.g. mag held from a slower stream)
   kFlagImplausible = 1u << 5,   ///< a field beyond the sensor's range was dropped (a glitch)
   kFlagGyrClipped = 1u << 6,  ///< a gyro axis is at its limit (with kFlagSaturated): rotation lost
+  /// The device restarted (a tracker that rebooted): its own orientation (q_device_sensor)
+  /// starts in a new frame, its heading unrelated to the one before.
+  kFlagDeviceRestarted = 1u << 7,
 };
 
 /// One time instant of one inertial sensor, after unit conversion and axis remapping.

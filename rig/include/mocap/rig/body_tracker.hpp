@@ -21,10 +21,11 @@
 //      gyro lost),
 //   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
 //      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted; a
-//      sensor silent for heading_lost_after_s lost its heading (marked lost before step 3,
-//      and after it turned so that its rotation in the segment above is the one before the
-//      gap: keep_joint_above, which finds the head so at once) and is found again here, or
-//      by its knee's hinge hold in step 5,
+//      sensor silent for heading_lost_after_s, or whose device restarted (a sample flagged
+//      kFlagDeviceRestarted), lost its heading (marked lost before step 3, and after it
+//      turned so that its rotation in the segment above is the one before the gap:
+//      keep_joint_above, which finds the head so at once) and is found again here, or by its
+//      knee's hinge hold in step 5,
 //   7. the skeleton's input (orientation and flags);
 // and per frame the skeleton solve (each segment holds its sensor's newest orientation).
 //
