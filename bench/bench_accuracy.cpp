@@ -168,7 +168,7 @@ struct AccuracyCommandOptions {
   long seed = 1;
   double rate_hz = 100, frame_rate_hz = 0;
   bool calibration_moves = false, gyro_scale_calibration = false, warmup = false, ideal = false,
-       markdown = false;
+       markdown = false, fused_on_device = false;
 };
 
 int run_accuracy(const AccuracyCommandOptions& args) {
@@ -217,6 +217,7 @@ int run_accuracy(const AccuracyCommandOptions& args) {
     }
     base.dropout_segment = all ? sim::AccuracyOptions::kDropoutAll : index(*seg);
   }
+  base.fused_on_device = args.fused_on_device;
   if (args.ideal) base.sensor = sim::SensorModelParams::ideal();
   if (!args.sensor_errors.empty()) {
     std::string bad;
@@ -332,6 +333,9 @@ void add_accuracy(CLI::App& bench, int& exit_code) {
                 "SEGMENT:START_S:SECONDS: that segment's sensor sends nothing for SECONDS from "
                 "START_S into the evaluated motion (a radio drop, a tracker rebooting); "
                 "SEGMENT all: every sensor (the receiver or the network dropped)");
+  c->add_flag("--fused-on-device", o->fused_on_device,
+              "the sensors compute their orientation themselves (SlimeVR over UDP): a dropout "
+              "drops only the link, their fusion runs on through it");
   c->add_flag("--markdown", o->markdown, "also print a markdown table on stderr");
   c->callback([o, &exit_code] { exit_code = run_accuracy(*o); });
 }

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "mocap/core/segments.hpp"
+#include "mocap/drivers/device.hpp"
 #include "mocap/skeleton/body_model.hpp"
 
 namespace mocap::daemon {
@@ -17,6 +18,7 @@ std::vector<rig::TrackerSensor> tracker_sensors(const Config& cfg) {
     if (const auto& g = s.gyr_scale) t.gyr_scale = Eigen::Vector3d((*g)[0], (*g)[1], (*g)[2]);
     if (const auto& n = s.site_normal)
       t.site_normal_body = Eigen::Vector3d((*n)[0], (*n)[1], (*n)[2]);
+    t.fused_on_device = fused_on_device(s.driver);
     out.push_back(t);
   }
   return out;

@@ -30,6 +30,7 @@ struct ProtocolInfo {
   int stop_bits = 1;
   std::unique_ptr<ProtocolDecoder> (*make_decoder)(const DeviceSpec&) = nullptr;
   std::vector<SetupStep> (*setup)(const DeviceSpec&) = nullptr;
+  bool fused_on_device = false;  ///< see mocap::fused_on_device
 };
 
 /// nullptr if unknown.

@@ -17,7 +17,7 @@ const ProtocolInfo kProtocols[] = {
     {"ds4", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
     {"dualsense", ProtocolInfo::kHid, 0, 1, make_playstation_decoder, playstation_setup},
     {"joycon", ProtocolInfo::kHid, 0, 1, make_joycon_decoder, joycon_setup},
-    {"slimevr", ProtocolInfo::kUdp, 0, 1, make_slimevr_decoder, nullptr},
+    {"slimevr", ProtocolInfo::kUdp, 0, 1, make_slimevr_decoder, nullptr, true},
     {"slimevr_hid", ProtocolInfo::kHid, 0, 1, make_slimevr_hid_decoder, nullptr},
 };
 }  // namespace
@@ -26,6 +26,11 @@ const ProtocolInfo* find_protocol(std::string_view name) {
   for (const auto& p : kProtocols)
     if (p.name == name) return &p;
   return nullptr;
+}
+
+bool fused_on_device(std::string_view protocol) {
+  const ProtocolInfo* p = find_protocol(protocol);
+  return p && p->fused_on_device;
 }
 
 std::string protocol_names() {

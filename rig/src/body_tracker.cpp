@@ -26,6 +26,9 @@ const double kCosHingeAgree = std::cos(10.0 * kRadPerDeg);
 /// of its time constants (95 % of the error taken out), counted in horizontal-axis seconds.
 const double kHingeFoundAfterS = 3 * HingeHeadingOptions{}.tau_s;
 
+/// The segment above's newest orientation is recent enough for a joint's constraints (ns).
+constexpr int64_t kPartnerFreshNs = 250'000'000;
+
 /// The configured setup with each sensor's site normal filled in (its own, or its segment's
 /// standard site; none for a sensor strapped anyhow).
 CalibrationSetup calibration_setup(const std::vector<TrackerSensor>& sensors,
@@ -156,10 +159,13 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   prev_t_ns_[k] = s.t_host_ns;
   const int seg = sensor.segment;
   if (seg < 0) return;
-  const bool may_lose = opt_.heading_lost_after_s > 0 && heading_.active();
+  // A heading of its own is lost in a silence (but not by a device that computes its
+  // orientation itself: it ran on) and at a restart of the device.
+  const bool may_lose = heading_.active();
+  const bool silence_loses = opt_.heading_lost_after_s > 0 && !sensor.fused_on_device;
   const bool was_lost = lost(seg);
-  if ((may_lose && dt_s > opt_.heading_lost_after_s) ||
-      ((s.flags & kFlagDeviceRestarted) && heading_.active()))
+  if (may_lose &&
+      ((silence_loses && dt_s > opt_.heading_lost_after_s) || (s.flags & kFlagDeviceRestarted)))
     lose_heading(seg);  // found again in step 6
   // 3. The sensor's orientation as its segment uses it; a watched local field may turn the
   //    mounting once it turns (and the held heading with it, or let it go: no motion, so the
@@ -188,15 +194,25 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   }
   if (s.has(kFieldGyr)) w_rad_s_[k] = s.gyr_rad_s - o.gyro_bias_rad_s;
   const RigMapping& rig = skeleton_.rig();
+  // A joint's constraints pair this sample with the segment above's newest: only while that
+  // one is recent (a silent sensor's last orientation would turn this one: a thigh silent 3 s
+  // while its device's fusion ran on, CMU 6D seed 1, its joint after 12.5 deg mean, 10.5
+  // lost and found again).
+  const auto fresh = [&](int sensor_above) {
+    return sensor_above >= 0 &&
+           s.t_host_ns - prev_t_ns_[static_cast<size_t>(sensor_above)] <= kPartnerFreshNs;
+  };
   for (Hinge& h : hinges_) {
     if (h.lower != seg || !rig.tracked(h.upper) || !s.has(kFieldGyr)) continue;
     const int up = rig.sensor_for_segment[h.upper];
+    if (!fresh(up)) continue;
     h.axis.add(q_earth_sensor(up), q, w_rad_s_[static_cast<size_t>(up)], w_rad_s_[k], s.t_host_ns);
     if (h.axis.updated()) apply_hinge_axes(h);
     hold_hinge_heading(h, q, dt_s, s.t_host_ns);
   }
   for (RangeJoint& r : ranges_)
-    if (r.child == seg) hold_range_heading(r, q, dt_s, s.t_host_ns);
+    if (r.child == seg && fresh(rig.sensor_for_segment[kSegmentParent[r.child]]))
+      hold_range_heading(r, q, dt_s, s.t_host_ns);
   // 6. 6D: the heading of the sensors whose facing is still unknown, from motion.
   if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
     feed_heading_from_motion(i, s, q, o.gyro_bias_rad_s);

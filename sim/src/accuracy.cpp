@@ -73,6 +73,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   std::vector<rig::TrackerSensor> sensors(Performer::kSensorCount);
   for (int id = 0; id < Performer::kSensorCount; ++id) {
     sensors[id].segment = index(Performer::sensor_segment(id));
+    sensors[id].fused_on_device = o.fused_on_device;
     if (o.gyro_scale_calibration)
       sensors[id].gyr_scale = calibrated_gyro_scale(perf.sensor_errors(id), o.rate_hz);
   }
@@ -135,10 +136,13 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     const bool dropping =
         k * frame_s >= dropout_from_s && k * frame_s < dropout_from_s + o.dropout_s;
     for (ImuSample& s : samples) {
-      if (dropping &&
-          (drop_all || index(Performer::sensor_segment(s.sensor_id)) == o.dropout_segment))
-        continue;
-      tracker.on_sample(s.sensor_id, s);
+      const bool dropped = dropping && (drop_all || index(Performer::sensor_segment(s.sensor_id)) ==
+                                                        o.dropout_segment);
+      if (dropped && !o.fused_on_device) continue;
+      if (dropped)
+        tracker.filter_sample(s.sensor_id, s);  // the device's own fusion runs on; unsent
+      else
+        tracker.on_sample(s.sensor_id, s);
       ImuSample a = s;
       a.gyr_rad_s = a.gyr_rad_s.cwiseQuotient(tracker.sensor(s.sensor_id).gyr_scale);
       if (!o.use_mag) a.valid = static_cast<uint8_t>(a.valid & ~kFieldMag);

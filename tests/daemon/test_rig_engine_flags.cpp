@@ -69,5 +69,22 @@ TEST(DaemonMagFlags, NoReferenceDuringStartUpThenNeitherFlag) {
     EXPECT_FALSE(engine.sensor_health(i).mag_no_reference) << i;
 }
 
+// A SlimeVR tracker over UDP computes its orientation itself and keeps doing so through a
+// silence of the link: the body tracker is told so (its heading survives the silence, a
+// reboot loses it); the dongle's trackers and every other driver are not.
+TEST(DaemonTrackerSensors, SlimeVrOverUdpIsFusedOnTheDevice) {
+  std::optional<Config> cfg = performer_rig();
+  ASSERT_TRUE(cfg);
+  cfg->sensors[0].driver = "slimevr";
+  cfg->sensors[1].driver = "slimevr_hid";
+  cfg->sensors[2].driver = "witmotion";
+  const std::vector<rig::TrackerSensor> t = tracker_sensors(*cfg);
+  ASSERT_EQ(t.size(), cfg->sensors.size());
+  EXPECT_TRUE(t[0].fused_on_device);
+  EXPECT_FALSE(t[1].fused_on_device);
+  EXPECT_FALSE(t[2].fused_on_device);
+  EXPECT_FALSE(t[3].fused_on_device);  // "direct": the performer's samples
+}
+
 }  // namespace
 }  // namespace mocap::daemon

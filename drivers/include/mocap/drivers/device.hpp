@@ -116,6 +116,10 @@ class Device {
 /// Factories (drivers/src/registry.cpp). Throw std::invalid_argument with a clear message for an
 /// unknown protocol or malformed spec.
 std::unique_ptr<StreamDecoder> make_decoder(const DeviceSpec& spec);
+/// Whether the protocol's devices compute their orientation themselves, keep computing it
+/// through a silence of the link and flag their restarts (kFlagDeviceRestarted): SlimeVR over
+/// UDP. false for an unknown protocol.
+bool fused_on_device(std::string_view protocol);
 /// For a serial sensor whose rate x bytes per sample x bits per byte (10 for 8N1, 11 for 8N2)
 /// exceeds its baud: a message saying so and what to change; "" otherwise (or when the
 /// protocol's sample size or the rate is not known, or the port is not a serial link).

@@ -18,14 +18,15 @@
 //      (24 CMU clips, mean 12.9 deg against 4.4 without); in 6D each knee's two segments'
 //      relative heading is then held to its hinge (hinge_heading.hpp), each turning half way,
 //      and each thigh's heading to its hip's range (range_heading.hpp: a heading a clipped
-//      gyro lost),
+//      gyro lost); each pairs the sample with the segment above's orientation only while
+//      that one is recent (kPartnerFreshNs: a silent sensor's last one would turn this one),
 //   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
 //      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted; a
-//      sensor silent for heading_lost_after_s, or whose device restarted (a sample flagged
-//      kFlagDeviceRestarted), lost its heading (marked lost before step 3, and after it
-//      turned so that its rotation in the segment above is the one before the gap:
-//      keep_joint_above, which finds the head so at once) and is found again here, or by its
-//      knee's hinge hold in step 5,
+//      sensor silent for heading_lost_after_s (unless fused on its device: it ran on), or whose
+//      device restarted (a sample flagged kFlagDeviceRestarted), lost its heading (marked lost
+//      before step 3, and after it turned so that its rotation in the segment above is the one
+//      before the gap: keep_joint_above, which finds the head so at once) and is found again here,
+//      or by its knee's hinge hold in step 5,
 //   7. the skeleton's input (orientation and flags);
 // and per frame the skeleton solve (each segment holds its sensor's newest orientation).
 //
@@ -69,6 +70,10 @@ struct TrackerSensor {
   Eigen::Vector3d site_normal_body = Eigen::Vector3d::Zero();
   /// false: strapped anyhow (no site assumed); its mounting yaw is found from motion.
   bool on_site = true;
+  /// Its orientation is computed on the device, which keeps computing it through a silence of
+  /// the link and flags its restarts (kFlagDeviceRestarted; drivers' fused_on_device: SlimeVR
+  /// over UDP): silence alone does not lose its heading (heading_lost_after_s), a restart does.
+  bool fused_on_device = false;
 };
 
 struct TrackerOptions {

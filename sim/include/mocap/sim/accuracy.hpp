@@ -61,6 +61,10 @@ struct AccuracyOptions {
   static constexpr int kDropoutAll = kSegmentCount;
   int dropout_segment = -1;
   double dropout_start_s = 0, dropout_s = 0;
+  /// The sensors' orientations computed on the device (as a SlimeVR tracker's), so only the
+  /// link drops: each filter runs on through the dropout, the body tracker sees nothing of it,
+  /// and is told (TrackerSensor::fused_on_device).
+  bool fused_on_device = false;
 };
 
 struct AccuracyResult {
