@@ -213,8 +213,6 @@ void SlimeVrDecoder::handle(int bi, const sv::Packet& p, int64_t t_ns, SampleSin
       b.firmware_len = p.firmware_len;
       for (Sensor& s : sensors_) {
         if (s.map.mac != b.mac) continue;
-        // The board back from another address after its sensors streamed: it rebooted.
-        if (s.board != bi && s.last_emit_ns != 0) s.restarted = true;
         if (s.board >= 0 && s.board != bi) boards_[static_cast<std::size_t>(s.board)].used = false;
         s.board = bi;
       }
@@ -302,10 +300,11 @@ void SlimeVrDecoder::emit(Sensor& s, int64_t t_ns, SampleSink& sink, uint8_t fla
   out.q_device_sensor = s.q;
   out.valid = kFieldQuat;
   // A board counts its packets from its start: a rotation numbered below the last one seen
-  // (accepted after a handshake, which restarts the count) is from a board that rebooted.
-  if (number != 0 && static_cast<uint32_t>(number) < s.number) s.restarted = true;
-  out.flags = flags | (s.restarted ? kFlagDeviceRestarted : 0);
-  s.restarted = false;
+  // (accepted after a handshake, which restarts the count) is from a board that rebooted. One
+  // back after a silence with its count going on (from the same address or another) did not:
+  // its fusion ran on.
+  const bool restarted = number != 0 && static_cast<uint32_t>(number) < s.number;
+  out.flags = flags | (restarted ? kFlagDeviceRestarted : 0);
   s.last_emit_ns = t_ns;
   if (s.has_acc) {
     // The tracker sends linear acceleration (gravity removed) in the sensor frame; the sample
@@ -347,8 +346,8 @@ void SlimeVrDecoder::tick(int64_t t_ns, SampleSink& sink) {
     }
     if (!b.hello) continue;
     for (Sensor& s : sensors_)
-      if (s.board == static_cast<int>(i) && s.connected && !s.restarted &&
-          t_ns - s.last_emit_ns >= kHoldNs && t_ns - b.last_heard_ns <= kAliveNs)
+      if (s.board == static_cast<int>(i) && s.connected && t_ns - s.last_emit_ns >= kHoldNs &&
+          t_ns - b.last_heard_ns <= kAliveNs)
         emit(s, t_ns, sink, kFlagInterpolated);  // at rest: the same orientation, still alive
     if (t_ns - b.last_heartbeat_ns >= kHeartbeatNs) {
       b.last_heartbeat_ns = t_ns;

@@ -107,10 +107,6 @@ class SlimeVrDecoder final : public ProtocolDecoder {
     DecoderCommon common;
     int board = -1;  ///< index in boards_ while connected
     bool new_quat = false, has_acc = false, connected = false;
-    /// Its board rebooted (its packet count began again, or it came back from another
-    /// address): the next sample says so (kFlagDeviceRestarted); the last orientation, of the
-    /// old frame, is not repeated meanwhile.
-    bool restarted = false;
     int64_t last_emit_ns = 0;
     uint32_t number = 0;  ///< packet number of the datagram with its newest rotation (0: none)
     Eigen::Quaterniond q = Eigen::Quaterniond::Identity();

@@ -160,9 +160,10 @@ TEST(SlimeVrDecoder, MapsMacAndSensorIdToTheRigSensorAndCarriesTheOrientation) {
 }
 
 // A tracker that reboots starts its orientation in a new frame: its first sample after says so
-// (kFlagDeviceRestarted; the body tracker then finds its heading again), whether it comes back
-// from the same address (its packet count begins again) or another; a handshake recorded again
-// in a take (the device re-records each board's every 250 ms) is no reboot.
+// (kFlagDeviceRestarted; the body tracker then finds its heading again): its packet count
+// begins again, from the same address or another. A handshake recorded again in a take (the
+// device re-records each board's every 250 ms) is none, nor is a board back after a silence
+// with its count going on (it reconnected: its fusion ran on).
 TEST(SlimeVrDecoder, ATrackerThatRebootedSaysSoInItsFirstSample) {
   auto dec = test::slimevr_decoder("slimevr", "02:5E:00:00:00:01/0=0");
   test::CollectSink sink;
@@ -186,12 +187,15 @@ TEST(SlimeVrDecoder, ATrackerThatRebootedSaysSoInItsFirstSample) {
   rotations(6, 8);
   send(hello);  // rebooted: the count begins again
   rotations(1, 3);
-  send(hello, 40001);  // rebooted, back from another port
+  t_ns += 4'000'000'000;
+  send(hello, 40001);  // back after a silence from another port, the count going on
   rotations(4, 5, 40001);
+  send(hello, 40002);  // rebooted, from another port
+  rotations(1, 2, 40002);
   const auto s = sink.snapshot();
-  ASSERT_EQ(s.size(), 13u);
+  ASSERT_EQ(s.size(), 15u);
   for (std::size_t i = 0; i < s.size(); ++i)
-    EXPECT_EQ((s[i].flags & kFlagDeviceRestarted) != 0, i == 8 || i == 11) << "sample " << i;
+    EXPECT_EQ((s[i].flags & kFlagDeviceRestarted) != 0, i == 8 || i == 13) << "sample " << i;
 }
 
 TEST(SlimeVrDecoder, ASensorWithoutAMacIsRefusedWithAClearError) {
