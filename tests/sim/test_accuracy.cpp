@@ -174,7 +174,7 @@ TEST(RealMotion, SixDHeadingLostInADropoutIsFoundAgain) {
 // dropout: their fusion runs on, so their headings are kept (TrackerSensor::fused_on_device),
 // and a joint's constraints wait for the silent segment above instead of pairing with its last
 // orientation. Each case against the same clip without the gap, joints from 5 s after it:
-// every sensor silent 3 s on 01_07 8.4 deg (8.2 without the gap; 80.6 with each heading lost
+// every sensor silent 3 s on 01_07 8.4 deg (8.3 without the gap; 80.6 with each heading lost
 // and sought again); the left thigh on 01_05 9.1 (9.1; 43.4 while its knee's and hip's holds
 // paired the moving shank with its last orientation).
 TEST(RealMotion, ADeviceFusedSensorKeepsItsHeadingThroughALinkDropout) {
