@@ -161,10 +161,10 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   if (seg < 0) return;
   // A heading of its own is lost in a silence (but not by a device that computes its
   // orientation itself: it ran on) and at a restart of the device.
-  const bool may_lose = heading_.active();
+  const bool own_headings = heading_.active();
   const bool silence_loses = opt_.heading_lost_after_s > 0 && !sensor.fused_on_device;
   const bool was_lost = lost(seg);
-  if (may_lose &&
+  if (own_headings &&
       ((silence_loses && dt_s > opt_.heading_lost_after_s) || (s.flags & kFlagDeviceRestarted)))
     lose_heading(seg);  // found again in step 6
   // 3. The sensor's orientation as its segment uses it; a watched local field may turn the
@@ -181,7 +181,7 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
     watch.on_sample(o, dt_s);
   }
   const Eigen::Quaterniond q = q_earth_sensor(i, o);
-  if (may_lose) keep_joint_above(seg, q, lost(seg) && !was_lost);
+  if (own_headings) keep_joint_above(seg, q, lost(seg) && !was_lost);
   // 4. Calibration capture; when it completes, the calibration.
   if (capturer_.capturing()) {
     capturer_.add_sample(seg, q, s.t_host_ns, s.has(kFieldAcc) ? &s.acc_m_s2 : nullptr);
@@ -194,25 +194,16 @@ void BodyTracker::track_prepared(int i, bool sent_mag, const ImuSample& s, const
   }
   if (s.has(kFieldGyr)) w_rad_s_[k] = s.gyr_rad_s - o.gyro_bias_rad_s;
   const RigMapping& rig = skeleton_.rig();
-  // A joint's constraints pair this sample with the segment above's newest: only while that
-  // one is recent (a silent sensor's last orientation would turn this one: a thigh silent 3 s
-  // while its device's fusion ran on, CMU 6D seed 1, its joint after 12.5 deg mean, 10.5
-  // lost and found again).
-  const auto fresh = [&](int sensor_above) {
-    return sensor_above >= 0 &&
-           s.t_host_ns - prev_t_ns_[static_cast<size_t>(sensor_above)] <= kPartnerFreshNs;
-  };
   for (Hinge& h : hinges_) {
     if (h.lower != seg || !rig.tracked(h.upper) || !s.has(kFieldGyr)) continue;
     const int up = rig.sensor_for_segment[h.upper];
-    if (!fresh(up)) continue;
+    if (!recent(up, s.t_host_ns)) continue;
     h.axis.add(q_earth_sensor(up), q, w_rad_s_[static_cast<size_t>(up)], w_rad_s_[k], s.t_host_ns);
     if (h.axis.updated()) apply_hinge_axes(h);
     hold_hinge_heading(h, q, dt_s, s.t_host_ns);
   }
   for (RangeJoint& r : ranges_)
-    if (r.child == seg && fresh(rig.sensor_for_segment[kSegmentParent[r.child]]))
-      hold_range_heading(r, q, dt_s, s.t_host_ns);
+    if (r.child == seg) hold_range_heading(r, q, dt_s, s.t_host_ns);
   // 6. 6D: the heading of the sensors whose facing is still unknown, from motion.
   if (heading_.active() && s.has(kFieldGyr) && s.has(kFieldAcc)) {
     feed_heading_from_motion(i, s, q, o.gyro_bias_rad_s);
@@ -309,6 +300,14 @@ bool BodyTracker::found_by_hinge(int s) const {
   return false;
 }
 
+// A joint's constraints pair a sample with the segment above's newest only while that one is
+// recent: a silent sensor's last orientation would turn this one (a thigh silent 3 s while its
+// device's fusion ran on, CMU 6D seed 1: its joint after 12.5 deg mean, 10.5 lost and found
+// again, 8.7 so).
+bool BodyTracker::recent(int i, int64_t t_ns) const {
+  return t_ns - prev_t_ns_[static_cast<size_t>(i)] <= kPartnerFreshNs;
+}
+
 void BodyTracker::hold_hinge_heading(Hinge& h, const Eigen::Quaterniond& q, double dt_s,
                                      int64_t t_ns) {
   if (!hinge_holds(h)) return;
@@ -345,7 +344,7 @@ void BodyTracker::hold_range_heading(RangeJoint& r, const Eigen::Quaterniond& q,
   if (!ac.aligned || !ap.aligned || !ac.own_frame || ac.heading_lost || ap.heading_lost) return;
   const Calibration& c = align_.calibration();
   const int up = skeleton_.rig().sensor_for_segment[parent];
-  if (up < 0) return;
+  if (up < 0 || !recent(up, t_ns)) return;
   r.heading.add(skeleton_.limits().joint[r.child],
                 c.segment_from_sensor(parent, q_earth_sensor(up)),
                 c.segment_from_sensor(r.child, q), dt_s);

@@ -213,6 +213,9 @@ class BodyTracker {
   void lose_heading(int s);
   /// Whether segment s's heading is lost now.
   bool lost(int s) const { return s >= 0 && align_.segment(s).heading_lost; }
+  /// Whether sensor i's newest sample is recent at t_ns (kPartnerFreshNs): a joint's
+  /// constraints pair a sample only with such a one of the segment above.
+  bool recent(int i, int64_t t_ns) const;
   /// Each segment's rotation in the nearest tracked segment above it (`above`), both as
   /// published at the segment's newest sample, while headings can be lost (6D).
   struct JointAbove {
