@@ -120,10 +120,13 @@ TEST(RealMotion, SixDLegWhoseGyrosClipComesBackToItsHipsRange) {
 // the mounting motion and the knees' hinge axes find the mountings, head and feet
 // from motion: measured 1.07-1.44 x the ideally aligned filters, worst segment excess 5.2 deg
 // (03_01 seed 2, a foot); before the fits below a segment restarted when it found its facing,
-// 5.5 x and 38.6 deg there (a foot fitted to the thigh's rates locked 72 deg off).
+// 5.5 x and 38.6 deg there (a foot fitted to the thigh's rates locked 72 deg off). Seed 5 straps
+// the pelvis, left thigh and shank so that no site gives their facing: the left foot had no
+// known segment above it when the fits started, and before a fit started once one was found,
+// its heading was never sought (foot_l 37.7 / 45.0 deg worse than alone; 0.4 / 0.6 now).
 TEST(RealMotion, RandomlyStrappedSensorsAreFoundNotRefused) {
   for (const char* name : {"02_01", "03_01"})
-    for (uint64_t seed : {1, 2})
+    for (uint64_t seed : {1, 2, 5})
       for (bool mag : {true, false}) {
         AccuracyOptions o = after_moves(clip(name), seed);
         o.use_mag = mag;
