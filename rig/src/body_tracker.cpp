@@ -254,6 +254,8 @@ void BodyTracker::finish_calibration() {
     h.axis.reset(c.pose == CalibrationPose::npose ? c.t_end_ns : 0);
     if (c.pose == CalibrationPose::npose && c.have[h.upper] && c.have[h.lower])
       h.axis.set_pose_up(c.up_sensor(h.upper), c.up_sensor(h.lower));
+    if (!align_.segment(h.upper).facing.known() || !align_.segment(h.lower).facing.known())
+      h.axis.set_early_answers();
     h.heading.reset();
   }
   for (RangeJoint& r : ranges_)
@@ -272,6 +274,8 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
   const PoseCapture& c = align_.capture();
   const double sigma = est.sigma_deg();
   for (const auto& [s, j] : {std::pair{upper, est.axis1()}, std::pair{lower, est.axis2()}}) {
+    // An early answer (less evidence) only for a segment that has no facing at all.
+    if (!est.full_evidence() && align_.segment(s).facing.known()) continue;
     // The axis points to the left (+y); forward is y x z.
     const Eigen::Vector3d forward = j.cross(c.up_sensor(s));
     if (forward.norm() < 0.5) continue;  // the axis near the segment's long axis: no yaw in it

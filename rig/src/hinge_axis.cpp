@@ -40,6 +40,8 @@ HingeAxisEstimator::HingeAxisEstimator(int flex_sign, int capacity)
 
 void HingeAxisEstimator::reset(int64_t t_ns) {
   head_ = count_ = 0;
+  min_evidence_ = kMinEvidence;
+  full_evidence_ = false;
   t0_ns_ = t_prev_ns_ = t_entry_ns_ = t_solve_ns_ = t_window_ns_ = t_ns;
   for (Window& w : windows_)
     w = Window{};
@@ -125,9 +127,9 @@ void HingeAxisEstimator::solve() {
   // Enough tilt: the up axes' spread in both frames.
   const Eigen::Matrix<double, 6, 1> mean = sum_ / weight_;
   const Eigen::Matrix<double, 6, 6> cov = normal_ - weight_ * mean * mean.transpose();
-  if (cov.block<3, 3>(0, 0).trace() < kMinEvidence * 0.5 ||
-      cov.block<3, 3>(3, 3).trace() < kMinEvidence * 0.5)
-    return;
+  const double evidence = std::min(cov.block<3, 3>(0, 0).trace(), cov.block<3, 3>(3, 3).trace());
+  if (evidence < min_evidence_ * 0.5) return;
+  full_evidence_ = evidence >= kMinEvidence * 0.5;
   // The axes and the windows' relative headings, alternated (horizontal_rows fits the headings
   // to the axes as they are) kFitRounds times from the last answer.
   Eigen::Matrix<double, 6, 6> whole;

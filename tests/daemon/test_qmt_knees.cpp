@@ -9,7 +9,10 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -39,10 +42,43 @@ double off_hinge_deg(const Eigen::Quaterniond& q) {
   return 2 * std::acos(std::min(1.0, std::abs(swing.w()))) * kDegPerRad;
 }
 
-TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
+/// The source with each sensor's gyro and acc axes turned by a uniformly random rotation of its
+/// own (seeded): the same real motion as if every sensor had been strapped another way round.
+class Restrapped final : public SampleSource {
+ public:
+  Restrapped(std::unique_ptr<SampleSource> src, unsigned seed) : src_(std::move(src)) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> n(0, 1);
+    for (Eigen::Quaterniond& q : turn_)
+      q = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized();
+  }
+  const Config& config() const override { return src_->config(); }
+  bool next(ImuSample& out) override {
+    if (!src_->next(out)) return false;
+    const Eigen::Quaterniond& q = turn_[static_cast<size_t>(out.sensor_id) % turn_.size()];
+    out.gyr_rad_s = q * out.gyr_rad_s;
+    out.acc_m_s2 = q * out.acc_m_s2;
+    return true;
+  }
+  const std::string& error() const override { return src_->error(); }
+  double progress() const override { return src_->progress(); }
+
+ private:
+  std::unique_ptr<SampleSource> src_;
+  std::array<Eigen::Quaterniond, 64> turn_;
+};
+
+struct Knees {
+  double left = 0, right = 0;                  ///< deg RMS off the hinge from 5 s
+  std::array<int, kSegmentCount> big_turns{};  ///< frame-to-frame turns over 30 deg from 5 s
+};
+
+/// The run replayed with an N-pose at 2 s (restrap_seed > 0: every sensor turned at random).
+Knees run_qmt(unsigned restrap_seed) {
   const std::string path =
       std::string(MOCAP_SHARED_DIR) + "/datasets/qmt-fullbody/fullbody_run.csv.gz";
-  auto src = open_sample_source(path, nullptr);
+  std::unique_ptr<SampleSource> src = open_sample_source(path, nullptr);
+  if (restrap_seed > 0) src = std::make_unique<Restrapped>(std::move(src), restrap_seed);
   ReplayRun run(replay_config(*src, false, {"filter.use_mag=false"}, path), *src, path, false);
   KneeFrames frames;
   run.core.add_sink(&frames);
@@ -50,15 +86,13 @@ TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
   opt.calibrate_pose = CalibrationPose::npose;
   opt.calibrate_at_s = 2.0;
   run_replay(*src, run.core, opt);
-  ASSERT_TRUE(run.engine.skeleton().calibration().valid) << run.engine.last_calibration_message();
-  ASSERT_GT(frames.f.size(), 9000u);
+  EXPECT_TRUE(run.engine.skeleton().calibration().valid) << run.engine.last_calibration_message();
+  EXPECT_GT(frames.f.size(), 9000u);
+  Knees out;
+  if (frames.f.empty()) return out;
   const int64_t t0 = frames.f.front().t_ns;
   double sum2[2] = {0, 0};
   int n = 0;
-  // Per segment: frame-to-frame turns over 30 deg after the still start (a flip, or a facing
-  // found from motion applied at once: the first hinge answers turned both thighs 73-78 deg in
-  // one frame before they were slewed).
-  std::array<int, kSegmentCount> big_turns{};
   for (size_t k = 1; k < frames.f.size(); ++k) {
     const PoseFrame& fr = frames.f[k];
     if (fr.t_ns - t0 < 5'000'000'000) continue;
@@ -71,10 +105,20 @@ TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
     for (int s = 0; s < kSegmentCount; ++s) {
       const Eigen::Quaterniond a = quat(frames.f[k - 1].q_earth_segment[s]);
       const Eigen::Quaterniond b = quat(fr.q_earth_segment[s]);
-      if (a.angularDistance(b) > 30 * kRadPerDeg) ++big_turns[s];
+      if (a.angularDistance(b) > 30 * kRadPerDeg) ++out.big_turns[s];
     }
   }
-  const double left = std::sqrt(sum2[0] / n), right = std::sqrt(sum2[1] / n);
+  out.left = std::sqrt(sum2[0] / n);
+  out.right = std::sqrt(sum2[1] / n);
+  return out;
+}
+
+TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
+  // Per segment: frame-to-frame turns over 30 deg after the still start (a flip, or a facing
+  // found from motion applied at once: the first hinge answers turned both thighs 73-78 deg in
+  // one frame before they were slewed).
+  const Knees k = run_qmt(0);
+  const double left = k.left, right = k.right;
   RecordProperty("knee_l_off_axis_deg", std::to_string(left));
   RecordProperty("knee_r_off_axis_deg", std::to_string(right));
   // Measured 8.6 / 9.0 deg (8.5-8.8 / 9.0-10.1 over calibrations at 1-3.5 s); 9.2 / 9.5 with
@@ -90,7 +134,23 @@ TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
   EXPECT_LT(left, 9.5);
   EXPECT_LT(right, 10.0);
   for (int s = 0; s < kSegmentCount; ++s)
-    EXPECT_EQ(big_turns[s], 0) << kSegmentNames[s];
+    EXPECT_EQ(k.big_turns[s], 0) << kSegmentNames[s];
+}
+
+// Every sensor of the real run turned at random on its segment (strapped any way): no site gives
+// a facing, so each knee's sit off its hinge until its axis fit's first answer, which then comes
+// from less evidence (HingeAxisEstimator::kEarlyEvidence). Measured, seeds 2 / 4: left 9.56 /
+// 8.70, right 8.71 / 9.03 deg; left 10.38 / 10.43 with the first answer waiting for full evidence
+// (over seeds 1-8, mean left / right 9.16 / 9.10 against 9.59 / 9.23; none worse; 8.6 / 9.0 on
+// the lab's own straps).
+TEST(QmtFullBody, RestrappedAtRandomTheKneesStillFindTheirHinge) {
+  for (unsigned seed : {2u, 4u}) {
+    const Knees k = run_qmt(seed);
+    EXPECT_LT(k.left, 10.0) << "seed " << seed;
+    EXPECT_LT(k.right, 10.0) << "seed " << seed;
+    for (int s = 0; s < kSegmentCount; ++s)
+      EXPECT_EQ(k.big_turns[s], 0) << "seed " << seed << " " << kSegmentNames[s];
+  }
 }
 
 }  // namespace

@@ -72,6 +72,11 @@ class HingeAxisEstimator {
   static constexpr double kWindowS = 5.0;
   /// Before a first answer: this much tilt evidence (sum of |u - u_mean|^2 over samples).
   static constexpr double kMinEvidence = 20.0;
+  /// Or this much where a segment of the hinge has no facing at all (set_early_answers): an
+  /// answer from less evidence is worse than a site prior (CMU 6D after an N-pose alone, 5 for
+  /// every hinge: 1.22 -> 1.26-1.30 x) but far better than none (the real run with every sensor
+  /// turned at random on its segment: its knees 20-30 deg off their hinge until the first answer).
+  static constexpr double kEarlyEvidence = 5.0;
   /// The pose prior's weight, in samples (2 s of motion's rows).
   static constexpr double kPriorSamples = 100.0;
   static constexpr double kOvershootDeg = 15.0;
@@ -80,8 +85,13 @@ class HingeAxisEstimator {
   /// flex_sign: +1 a knee (flexion positive about the left axis), -1 an elbow.
   explicit HingeAxisEstimator(int flex_sign = 1, int capacity = 1000);
 
-  /// Starts over from a calibration pose (the joint straight at t_ns); 0: stops.
+  /// Starts over from a calibration pose (the joint straight at t_ns); 0: stops. Answers wait
+  /// for kMinEvidence again.
   void reset(int64_t t_ns);
+  /// After reset: answers from kEarlyEvidence on (a segment's facing is unknown).
+  void set_early_answers() { min_evidence_ = kEarlyEvidence; }
+  /// The newest answer had kMinEvidence (an early one did not).
+  bool full_evidence() const { return full_evidence_; }
   /// After reset: the pose had both segments vertical, their up axes up1, up2 (unit, each
   /// sensor's frame): the axis was horizontal in it (the pose prior above).
   void set_pose_up(const Eigen::Vector3d& up1, const Eigen::Vector3d& up2);
@@ -156,6 +166,8 @@ class HingeAxisEstimator {
   bool rows_on_ = false;  ///< the signs have been sure since the reset: horizontal rows join
   Eigen::Vector3d j1_ = Eigen::Vector3d::UnitY(), j2_ = Eigen::Vector3d::UnitY();
   double sigma_deg_ = 180, sign_agreement_ = 0, sign_margin_ = 0;
+  double min_evidence_ = kMinEvidence;
+  bool full_evidence_ = false;
 };
 
 }  // namespace mocap::rig
