@@ -4,7 +4,8 @@
 // replay engine mocapd runs. A real knee stays near its hinge: each knee's rotation off its
 // flexion axis (scripts/qmt-knees prints the same figure); and no segment jumps: an alignment
 // found from motion turns its segment at most 360 deg/s, so no frame-to-frame turn comes near
-// the 30 deg bound (the run's own fastest is 17 deg, a foot at a strike).
+// the 30 deg bound (the run's own fastest is 17 deg, a foot at a strike). The same with every
+// sensor turned at random on its segment (strapped any way).
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -138,7 +139,7 @@ TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
 }
 
 // Every sensor of the real run turned at random on its segment (strapped any way): no site gives
-// a facing, so each knee's sit off its hinge until its axis fit's first answer, which then comes
+// a facing, so each knee sits off its hinge until its axis fit's first answer, which then comes
 // from less evidence (HingeAxisEstimator::kEarlyEvidence). Measured, seeds 2 / 4: left 9.56 /
 // 8.70, right 8.71 / 9.03 deg; left 10.38 / 10.43 with the first answer waiting for full evidence
 // (over seeds 1-8, mean left / right 9.16 / 9.10 against 9.59 / 9.23; none worse; 8.6 / 9.0 on

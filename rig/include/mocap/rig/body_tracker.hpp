@@ -9,7 +9,8 @@
 //   4. the calibration capture (pose_capture.hpp) and, when it completes, the calibration
 //      (calibrate.hpp) into the segments' alignment,
 //   5. mounting from motion: the mounting motion's window after an N-pose (mounting_motion.hpp)
-//      and the knees' hinge axes from any motion (hinge_axis.hpp), each giving facings that
+//      and the knees' hinge axes from any motion (hinge_axis.hpp; a first answer from less
+//      evidence for a segment with no facing at all), each giving facings that
 //      replace assumed ones (facing.hpp: replaces; the published pose eases onto one found
 //      while tracking, never in one frame: skeleton.hpp); a segment that gets its facing becomes
 //      the reference of the fits below it. Not the elbows: a forearm sensor turns with pronation
