@@ -528,6 +528,11 @@ bool BodyTracker::heading_known(int s, const std::array<bool, kSegmentCount>& ow
          (!own[s] || (align_.segment(s).facing.known() && !align_.segment(s).heading_lost));
 }
 
+bool BodyTracker::seek_heading(int s, const std::array<bool, kSegmentCount>& own) const {
+  return opt_.calibration.heading == HeadingSource::mount_normals && skeleton_.rig().tracked(s) &&
+         !heading_known(s, own);
+}
+
 int BodyTracker::known_above(int s, const std::array<bool, kSegmentCount>& own) const {
   int p = kSegmentParent[s];
   while (p >= 0 && !heading_known(p, own))
@@ -538,12 +543,10 @@ int BodyTracker::known_above(int s, const std::array<bool, kSegmentCount>& own) 
 void BodyTracker::start_heading_from_motion() {
   std::array<int, kSegmentCount> reference;
   reference.fill(-1);
-  const RigMapping& rig = skeleton_.rig();
   const std::array<bool, kSegmentCount> own = own_heading_frames();
   // The segments whose heading is not known are fitted to the nearest known one above.
-  if (opt_.calibration.heading == HeadingSource::mount_normals)
-    for (int s = 0; s < kSegmentCount; ++s)
-      if (rig.tracked(s) && !heading_known(s, own)) reference[s] = known_above(s, own);
+  for (int s = 0; s < kSegmentCount; ++s)
+    if (seek_heading(s, own)) reference[s] = known_above(s, own);
   // Segments aligned from their own horizontal site normal are refined against the same
   // evidence, within a band (a strap tilted off the normal turns that alignment). Not the upper
   // arms: the shoulder girdle moves on the torso, which the model holds rigid, so the shoulder's
@@ -604,12 +607,9 @@ void BodyTracker::refit_against(int s) {
   // they follow at the drift limit; restarting made the first estimate after each hinge update
   // count, from little evidence.)
   const std::array<bool, kSegmentCount> own = own_heading_frames();
-  const bool fit_unknown = opt_.calibration.heading == HeadingSource::mount_normals;
   for (int t = 0; t < kSegmentCount; ++t) {
     const int ref = heading_.reference(t);
-    const bool unfitted =
-        ref < 0 && fit_unknown && skeleton_.rig().tracked(t) && !heading_known(t, own);
-    if (t == s || (ref < 0 && !unfitted) || refine_[t]) continue;
+    if (t == s || (ref < 0 && !seek_heading(t, own)) || refine_[t]) continue;
     bool below = false;
     for (int p = kSegmentParent[t]; p >= 0 && !below; p = kSegmentParent[p])
       below = p == s;

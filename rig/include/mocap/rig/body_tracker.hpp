@@ -254,6 +254,9 @@ class BodyTracker {
   void start_heading_from_motion();
   /// Whether segment s's heading is known (shares the earth frame, or has a facing).
   bool heading_known(int s, const std::array<bool, kSegmentCount>& own) const;
+  /// Whether segment s's heading is to be fitted from motion: tracked, not known, and the rig
+  /// calibrated from the mount normals.
+  bool seek_heading(int s, const std::array<bool, kSegmentCount>& own) const;
   /// The nearest segment above s whose heading is known; -1 if none.
   int known_above(int s, const std::array<bool, kSegmentCount>& own) const;
   /// Segment s's fit against `ref`: acceleration pairing or rates, the lever arms.
