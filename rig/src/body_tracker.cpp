@@ -28,6 +28,12 @@ const double kHingeFoundAfterS = 3 * HingeHeadingOptions{}.tau_s;
 
 /// The segment above's newest orientation is recent enough for a joint's constraints (ns).
 constexpr int64_t kPartnerFreshNs = 250'000'000;
+/// An early hinge answer further than this from the one before is not taken: the fit has not
+/// settled (CMU 02_03 after an N-pose alone, seeds 6 and 9: a second answer 35 deg from the
+/// first and 47 off the right shank's site prior, taken, put it 18.5 deg worse than its filter
+/// alone over the clip, 18.5 and 18.6 deg; 0.3 with this; 20 deg gives the same). The real run's
+/// first early answers come steady and are taken at once.
+constexpr double kEarlySteadyDeg = 10.0;
 
 /// The configured setup with each sensor's site normal filled in (its own, or its segment's
 /// standard site; none for a sensor strapped anyhow).
@@ -254,9 +260,8 @@ void BodyTracker::finish_calibration() {
     h.axis.reset(c.pose == CalibrationPose::npose ? c.t_end_ns : 0);
     if (c.pose == CalibrationPose::npose && c.have[h.upper] && c.have[h.lower])
       h.axis.set_pose_up(c.up_sensor(h.upper), c.up_sensor(h.lower));
-    if (!align_.segment(h.upper).facing.known() || !align_.segment(h.lower).facing.known())
-      h.axis.set_early_answers();
     h.heading.reset();
+    h.early_yaw_rad = {NAN, NAN};
   }
   for (RangeJoint& r : ranges_)
     r.heading.reset();
@@ -273,14 +278,23 @@ void BodyTracker::apply_hinge_axes(Hinge& h) {
   std::array<Facing, kSegmentCount> f{};
   const PoseCapture& c = align_.capture();
   const double sigma = est.sigma_deg();
-  for (const auto& [s, j] : {std::pair{upper, est.axis1()}, std::pair{lower, est.axis2()}}) {
-    // An early answer (less evidence) only for a segment that has no facing at all.
-    if (!est.full_evidence() && align_.segment(s).facing.known()) continue;
+  for (int side = 0; side < 2; ++side) {
+    const int s = side == 0 ? upper : lower;
     // The axis points to the left (+y); forward is y x z.
-    const Eigen::Vector3d forward = j.cross(c.up_sensor(s));
+    const Eigen::Vector3d forward = (side == 0 ? est.axis1() : est.axis2()).cross(c.up_sensor(s));
     if (forward.norm() < 0.5) continue;  // the axis near the segment's long axis: no yaw in it
     f[s] =
         facing_from_axis(c, s, forward, std::hypot(kModelSigmaDeg, sigma), AlignSource::hinge_axis);
+    if (est.full_evidence() || !f[s].known()) continue;
+    // An early answer (less evidence) only for a segment with no facing at all, or one whose
+    // assumed facing it contradicts (hinge_axis.hpp: kEarlyEvidence), and only while steady:
+    // the first, or within kEarlySteadyDeg of the one before.
+    const Facing& held = align_.segment(s).facing;
+    double& previous = h.early_yaw_rad[static_cast<size_t>(side)];
+    const bool steady = std::isnan(previous) || std::abs(wrap_angle_rad(f[s].yaw_rad - previous)) <
+                                                    kEarlySteadyDeg * kRadPerDeg;
+    previous = f[s].yaw_rad;
+    if (!steady || (held.known() && !contradicts(held, f[s]))) f[s] = Facing{};
   }
   apply_facings(f, true);
 }

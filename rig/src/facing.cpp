@@ -40,17 +40,24 @@ bool replaces(const Facing& held, const Facing& candidate) {
   constexpr double kSameSourceDeadBandDeg = 1.0;
   if (!candidate.known()) return false;
   if (!held.known() || candidate.sigma_deg < held.sigma_deg) return true;
-  const double change_deg = std::abs(wrap_angle_rad(candidate.yaw_rad - held.yaw_rad)) * kDegPerRad;
   // The same estimate from more evidence, where it moved.
-  if (candidate.source == held.source) return change_deg > kSameSourceDeadBandDeg;
+  if (candidate.source == held.source)
+    return std::abs(wrap_angle_rad(candidate.yaw_rad - held.yaw_rad)) * kDegPerRad >
+           kSameSourceDeadBandDeg;
+  return contradicts(held, candidate);
+}
+
+bool contradicts(const Facing& held, const Facing& candidate) {
   const auto assumed = [](AlignSource s) {
     return s == AlignSource::site_normal || s == AlignSource::sensor_axis;
   };
   const auto measured = [](AlignSource s) {
     return s == AlignSource::motion || s == AlignSource::hinge_axis;
   };
-  return assumed(held.source) && measured(candidate.source) &&
-         change_deg > 3 * std::hypot(held.sigma_deg, candidate.sigma_deg);
+  if (!held.known() || !candidate.known() || !assumed(held.source) || !measured(candidate.source))
+    return false;
+  const double change_deg = std::abs(wrap_angle_rad(candidate.yaw_rad - held.yaw_rad)) * kDegPerRad;
+  return change_deg > 3 * std::hypot(held.sigma_deg, candidate.sigma_deg);
 }
 
 Facing facing_from_axis(const PoseCapture& c, int s, const Eigen::Vector3d& forward_sensor,

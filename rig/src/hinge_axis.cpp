@@ -40,7 +40,6 @@ HingeAxisEstimator::HingeAxisEstimator(int flex_sign, int capacity)
 
 void HingeAxisEstimator::reset(int64_t t_ns) {
   head_ = count_ = 0;
-  min_evidence_ = kMinEvidence;
   full_evidence_ = false;
   t0_ns_ = t_prev_ns_ = t_entry_ns_ = t_solve_ns_ = t_window_ns_ = t_ns;
   for (Window& w : windows_)
@@ -128,7 +127,7 @@ void HingeAxisEstimator::solve() {
   const Eigen::Matrix<double, 6, 1> mean = sum_ / weight_;
   const Eigen::Matrix<double, 6, 6> cov = normal_ - weight_ * mean * mean.transpose();
   const double evidence = std::min(cov.block<3, 3>(0, 0).trace(), cov.block<3, 3>(3, 3).trace());
-  if (evidence < min_evidence_ * 0.5) return;
+  if (evidence < kEarlyEvidence * 0.5) return;
   full_evidence_ = evidence >= kMinEvidence * 0.5;
   // The axes and the windows' relative headings, alternated (horizontal_rows fits the headings
   // to the axes as they are) kFitRounds times from the last answer.
@@ -178,7 +177,7 @@ void HingeAxisEstimator::solve() {
                          kRelativeSignRatio * (std::min(flipped2, elevation2) + kFloor2);
   choose_signs(relative_sign_known_);
   known_ = updated_ = true;
-  rows_on_ = rows_on_ || signs_sure();
+  rows_on_ = rows_on_ || (signs_sure() && full_evidence_);
 }
 
 Eigen::Matrix<double, 6, 6> HingeAxisEstimator::horizontal_rows() {

@@ -122,7 +122,10 @@ TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
   const double left = k.left, right = k.right;
   RecordProperty("knee_l_off_axis_deg", std::to_string(left));
   RecordProperty("knee_r_off_axis_deg", std::to_string(right));
-  // Measured 8.6 / 9.0 deg (8.5-8.8 / 9.0-10.1 over calibrations at 1-3.5 s); 9.2 / 9.5 with
+  // Measured 8.21 / 8.50 deg; 8.6 / 9.0 while the knees' first answers waited for full evidence
+  // where a site prior gave the facing (the lab's straps put those 37-68 deg off: the knees 13.0
+  // / 14.4 deg off their hinge from 5 to 15 s, 10.6 / 10.8 now). Before that (8.5-8.8 / 9.0-10.1
+  // over calibrations at 1-3.5 s); 9.2 / 9.5 with
   // the knee axes solved once a second in one round (8.7-9.3 / 9.5-10.7 over those moments;
   // 9.1 / 9.4 with the first hinge answers applied in one frame); 8.9 / 10.0, and
   // 8.8-11.5 / 10.0-10.8 over those moments, before the axis fit's pose prior;
@@ -132,23 +135,25 @@ TEST(QmtFullBody, KneesStayNearTheirHingeAndNothingFlips) {
   // held to the hinge and their axes fitted with it; 36.5 / 40.1 at the start of issue 28's
   // work, where the straps were taken to be on our standard sites; the goal of 8 is not met:
   // docs/accuracy.md).
-  EXPECT_LT(left, 9.5);
-  EXPECT_LT(right, 10.0);
+  EXPECT_LT(left, 8.5);
+  EXPECT_LT(right, 8.8);
   for (int s = 0; s < kSegmentCount; ++s)
     EXPECT_EQ(k.big_turns[s], 0) << kSegmentNames[s];
 }
 
 // Every sensor of the real run turned at random on its segment (strapped any way): no site gives
-// a facing, so each knee sits off its hinge until its axis fit's first answer, which then comes
-// from less evidence (HingeAxisEstimator::kEarlyEvidence). Measured, seeds 2 / 4: left 9.56 /
-// 8.70, right 8.71 / 9.03 deg; left 10.38 / 10.43 with the first answer waiting for full evidence
-// (over seeds 1-8, mean left / right 9.16 / 9.10 against 9.59 / 9.23; none worse; 8.6 / 9.0 on
-// the lab's own straps).
+// a facing, or a wrong one, so each knee sits off its hinge until its axis fit's first answer,
+// which then comes from less evidence (HingeAxisEstimator::kEarlyEvidence). Measured, seeds 2 /
+// 4: left 8.62 / 8.70, right 8.42 / 9.03 deg; left 9.56 / 8.70, right 8.71 / 9.03 while an early
+// answer was given only to a segment with no facing at all (not where it contradicted a site
+// prior); left 10.38 / 10.43 with every first answer waiting for full evidence.
 TEST(QmtFullBody, RestrappedAtRandomTheKneesStillFindTheirHinge) {
   for (unsigned seed : {2u, 4u}) {
     const Knees k = run_qmt(seed);
-    EXPECT_LT(k.left, 10.0) << "seed " << seed;
-    EXPECT_LT(k.right, 10.0) << "seed " << seed;
+    RecordProperty("knee_l_off_axis_deg_seed_" + std::to_string(seed), std::to_string(k.left));
+    RecordProperty("knee_r_off_axis_deg_seed_" + std::to_string(seed), std::to_string(k.right));
+    EXPECT_LT(k.left, 9.5) << "seed " << seed;
+    EXPECT_LT(k.right, 9.5) << "seed " << seed;
     for (int s = 0; s < kSegmentCount; ++s)
       EXPECT_EQ(k.big_turns[s], 0) << "seed " << seed << " " << kSegmentNames[s];
   }

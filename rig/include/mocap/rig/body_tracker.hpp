@@ -10,13 +10,13 @@
 //      (calibrate.hpp) into the segments' alignment,
 //   5. mounting from motion: the mounting motion's window after an N-pose (mounting_motion.hpp)
 //      and the knees' hinge axes from any motion (hinge_axis.hpp; a first answer from less
-//      evidence for a segment with no facing at all), each giving facings that
-//      replace assumed ones (facing.hpp: replaces; the published pose eases onto one found
-//      while tracking, never in one frame: skeleton.hpp); a segment that gets its facing becomes
-//      the reference of the fits below it. Not the elbows: a forearm sensor turns with pronation
-//      (the forearm segment carries it, skeleton.md), so its axis is not fixed in that sensor's
-//      frame; fitted as a hinge it turned the arms 30-140 deg off in 6D after an N-pose alone
-//      (24 CMU clips, mean 12.9 deg against 4.4 without); in 6D each knee's two segments'
+//      evidence for a segment with no facing, or whose site prior it contradicts), each giving
+//      facings that replace assumed ones (facing.hpp: replaces; the published pose eases onto one
+//      found while tracking, never in one frame: skeleton.hpp); a segment that gets its facing
+//      becomes the reference of the fits below it. Not the elbows: a forearm sensor turns with
+//      pronation (the forearm segment carries it, skeleton.md), so its axis is not fixed in that
+//      sensor's frame; fitted as a hinge it turned the arms 30-140 deg off in 6D after an N-pose
+//      alone (24 CMU clips, mean 12.9 deg against 4.4 without); in 6D each knee's two segments'
 //      relative heading is then held to its hinge (hinge_heading.hpp), each turning half way,
 //      and each thigh's heading to its hip's range (range_heading.hpp: a heading a clipped
 //      gyro lost); each pairs the sample with the segment above's orientation only while
@@ -39,6 +39,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -277,6 +278,8 @@ class BodyTracker {
     int upper, lower;
     HingeAxisEstimator axis;
     HingeHeading heading;
+    /// Each segment's facing from the previous early answer (NaN: none since the calibration).
+    std::array<double, 2> early_yaw_rad{NAN, NAN};
   };
   /// 6D: the hinge's relative heading held to its axis (hinge_heading.hpp), from a sample of
   /// its lower segment's sensor (orientation q, dt_s since its previous sample).

@@ -46,10 +46,12 @@ struct Facing {
 };
 
 /// Whether `candidate` should replace `held`: nothing held; surer; the same source's newer
-/// estimate where it moved by more than a degree; or measured (motion, hinge axis) where `held` was
-/// only assumed (a site normal, a sensor axis) and the two disagree by more than three combined
-/// sigmas (the strap is not where it was assumed to be).
+/// estimate where it moved by more than a degree; or where it contradicts `held`.
 bool replaces(const Facing& held, const Facing& candidate);
+/// `candidate` is measured (motion, hinge axis), `held` only assumed (a site normal, a sensor
+/// axis), and the two disagree by more than three combined sigmas: the strap is not where it
+/// was assumed to be.
+bool contradicts(const Facing& held, const Facing& candidate);
 
 /// The facing of `segment` from a sensor axis known to point along the segment's forward axis
 /// in the pose; none when that axis is near vertical.

@@ -12,10 +12,10 @@
 // femur's long axis; inclinations barely see that twist.
 //
 // The constraint's normal matrix, sum of v v^T with v = [u1; -u2] (6x6), is kept with
-// forgetting (kForgetS). Once an answer has fixed the axes' relative sign, the whole hinge
-// constraint joins it: q1 j1 = Rz(d) q2 j2, whose horizontal rows need d, the two 6D frames'
-// relative heading. d drifts, so it is taken per kWindowS window and fitted afresh to the axes
-// at every solve: each window keeps its rows in a form any d can be put into (Window), so the
+// forgetting (kForgetS). Once an answer from full evidence has fixed the axes' relative sign, the
+// whole hinge constraint joins it: q1 j1 = Rz(d) q2 j2, whose horizontal rows need d, the two 6D
+// frames' relative heading. d drifts, so it is taken per kWindowS window and fitted afresh to the
+// axes at every solve: each window keeps its rows in a form any d can be put into (Window), so the
 // fit alternates between the axes and the windows' headings, a least-squares fit of both over
 // the last kForgetS. (Following d with the axes as they were and adding rows with it, as
 // before, made rows agree with whatever axes the fit had: in a long stand the left knee's
@@ -70,12 +70,16 @@ class HingeAxisEstimator {
   static constexpr double kForgetS = 120.0;
   /// The two frames' relative heading is taken as constant over a window this long.
   static constexpr double kWindowS = 5.0;
-  /// Before a first answer: this much tilt evidence (sum of |u - u_mean|^2 over samples).
+  /// An answer from this much tilt evidence (sum of |u - u_mean|^2 over samples) is from full
+  /// evidence (full_evidence()): the tracker takes it for any segment.
   static constexpr double kMinEvidence = 20.0;
-  /// Or this much where a segment of the hinge has no facing at all (set_early_answers): an
-  /// answer from less evidence is worse than a site prior (CMU 6D after an N-pose alone, 5 for
-  /// every hinge: 1.22 -> 1.26-1.30 x) but far better than none (the real run with every sensor
-  /// turned at random on its segment: its knees 20-30 deg off their hinge until the first answer).
+  /// The first answers come from this much, marked as not from full evidence: the tracker gives
+  /// one only to a segment with no facing at all, or whose assumed facing (a site normal) it
+  /// contradicts by more than three combined sigmas (facing.hpp: contradicts). Taken for every
+  /// segment, an answer from less evidence is worse than a site prior (CMU 6D after an N-pose
+  /// alone: 1.22 -> 1.26-1.30 x), but a strap far from where it was assumed, or none, is worse
+  /// still (the real run: its lab straps put the site prior's facings 37-68 deg off, every
+  /// sensor turned at random its knees 20-30 deg off their hinge, until the first answer).
   static constexpr double kEarlyEvidence = 5.0;
   /// The pose prior's weight, in samples (2 s of motion's rows).
   static constexpr double kPriorSamples = 100.0;
@@ -86,10 +90,8 @@ class HingeAxisEstimator {
   explicit HingeAxisEstimator(int flex_sign = 1, int capacity = 1000);
 
   /// Starts over from a calibration pose (the joint straight at t_ns); 0: stops. Answers wait
-  /// for kMinEvidence again.
+  /// for kEarlyEvidence again.
   void reset(int64_t t_ns);
-  /// After reset: answers from kEarlyEvidence on (a segment's facing is unknown).
-  void set_early_answers() { min_evidence_ = kEarlyEvidence; }
   /// The newest answer had kMinEvidence (an early one did not).
   bool full_evidence() const { return full_evidence_; }
   /// After reset: the pose had both segments vertical, their up axes up1, up2 (unit, each
@@ -163,10 +165,11 @@ class HingeAxisEstimator {
   bool relative_sign_known_ = false;
   double weight_ = 0;
   bool known_ = false, updated_ = false;
-  bool rows_on_ = false;  ///< the signs have been sure since the reset: horizontal rows join
+  /// An answer from full evidence had sure signs since the reset: the horizontal rows join (not
+  /// from an early answer: fitted to it, they would hold the axes near a rough first answer).
+  bool rows_on_ = false;
   Eigen::Vector3d j1_ = Eigen::Vector3d::UnitY(), j2_ = Eigen::Vector3d::UnitY();
   double sigma_deg_ = 180, sign_agreement_ = 0, sign_margin_ = 0;
-  double min_evidence_ = kMinEvidence;
   bool full_evidence_ = false;
 };
 
