@@ -1,12 +1,14 @@
 // The calibration from a still-pose capture (pose_capture.hpp, calibrate.hpp, alignment.hpp):
 // mounting rotations recovered for arbitrary mountings, the body-heading sources, quality
-// refusal, never a refusal for want of standard sites, the heading reset.
+// refusal, never a refusal for want of standard sites, the heading reset; when a measured facing
+// replaces an assumed one (facing.hpp).
 #include <gtest/gtest.h>
 
 #include <optional>
 
 #include "../skeleton/skeleton_test_util.hpp"
 #include "mocap/rig/calibrate.hpp"
+#include "mocap/rig/facing.hpp"
 
 namespace mocap::rig {
 namespace {
@@ -278,6 +280,28 @@ TEST(Calibration, HeadingResetRemovesPerSensorYawDrift) {
                 1e-6);
     }
   }
+}
+
+// A measured facing (a hinge axis, the mounting motion) contradicts an assumed one (a site
+// normal, a sensor axis) only beyond three combined sigmas; nothing contradicts a measured one.
+TEST(Facing, AMeasuredFacingContradictsAnAssumedOneOnlyBeyondThreeSigmas) {
+  const auto facing = [](double yaw_deg, double sigma_deg, AlignSource source) {
+    return Facing{yaw_deg * kRadPerDeg, sigma_deg, source};
+  };
+  const Facing site = facing(170, 8, AlignSource::site_normal);
+  // 3 x hypot(8, 7) = 31.9 deg, across the +-180 wrap.
+  EXPECT_FALSE(contradicts(site, facing(-160, 7, AlignSource::hinge_axis)));  // 30 deg apart
+  EXPECT_TRUE(contradicts(site, facing(-155, 7, AlignSource::hinge_axis)));   // 35 deg
+  EXPECT_TRUE(contradicts(site, facing(120, 7, AlignSource::motion)));
+  EXPECT_FALSE(contradicts(site, facing(120, 20, AlignSource::hinge_axis)));  // unsure: 64.5
+  EXPECT_FALSE(
+      contradicts(facing(170, 8, AlignSource::motion), facing(100, 7, AlignSource::hinge_axis)));
+  EXPECT_FALSE(contradicts(site, facing(100, 7, AlignSource::site_normal)));
+  EXPECT_FALSE(contradicts(Facing{}, facing(100, 7, AlignSource::hinge_axis)));
+  // replaces() takes a contradicting one, and an agreeing one only when surer.
+  EXPECT_TRUE(replaces(site, facing(120, 9, AlignSource::hinge_axis)));
+  EXPECT_FALSE(replaces(site, facing(165, 9, AlignSource::hinge_axis)));
+  EXPECT_TRUE(replaces(site, facing(165, 5, AlignSource::hinge_axis)));
 }
 
 }  // namespace

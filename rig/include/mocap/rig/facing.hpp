@@ -29,7 +29,7 @@ enum class AlignSource : uint8_t {
   sensor_axis,    ///< a configured sensor axis points forward (calibration.heading_axis)
   site_normal,    ///< the sensor's z axis along its site's outward normal
   motion,         ///< the mounting motion: the segment's tilt in a bow/squat/curl
-  hinge_axis,     ///< the knee's or elbow's flexion axis found from the two segments' gyros
+  hinge_axis,     ///< the knee's flexion axis found from the two segments' tilt (hinge_axis.hpp)
   joint,          ///< 6D: kinematic constraints with the neighbouring segments
   heading_reset,  ///< a heading reset
   local_field,    ///< 9D: the filter's heading turned once the sensor left a local field

@@ -75,11 +75,12 @@ class HingeAxisEstimator {
   static constexpr double kMinEvidence = 20.0;
   /// The first answers come from this much, marked as not from full evidence: the tracker gives
   /// one only to a segment with no facing at all, or whose assumed facing (a site normal) it
-  /// contradicts by more than three combined sigmas (facing.hpp: contradicts). Taken for every
-  /// segment, an answer from less evidence is worse than a site prior (CMU 6D after an N-pose
-  /// alone: 1.22 -> 1.26-1.30 x), but a strap far from where it was assumed, or none, is worse
-  /// still (the real run: its lab straps put the site prior's facings 37-68 deg off, every
-  /// sensor turned at random its knees 20-30 deg off their hinge, until the first answer).
+  /// contradicts by more than three combined sigmas (facing.hpp: contradicts), and only while
+  /// steady (BodyTracker::apply_hinge_axes). Taken for every segment, an answer from less
+  /// evidence is worse than a site prior (CMU 6D after an N-pose alone: 1.22 -> 1.26-1.30 x),
+  /// but a strap far from where it was assumed, or none, is worse still (the real run: its lab
+  /// straps put the site prior's facings 37-68 deg off, every sensor turned at random its knees
+  /// 20-30 deg off their hinge, until the first answer).
   static constexpr double kEarlyEvidence = 5.0;
   /// The pose prior's weight, in samples (2 s of motion's rows).
   static constexpr double kPriorSamples = 100.0;
