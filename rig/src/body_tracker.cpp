@@ -30,8 +30,8 @@ const double kHingeFoundAfterS = 3 * HingeHeadingOptions{}.tau_s;
 constexpr int64_t kPartnerFreshNs = 250'000'000;
 /// An early hinge answer further than this from the one before is not taken: the fit has not
 /// settled (CMU 02_03 after an N-pose alone, seeds 6 and 9: a second answer 35 deg from the
-/// first and 47 off the right shank's site prior, taken, put it 18.5 deg worse than its filter
-/// alone over the clip, 18.5 and 18.6 deg; 0.3 with this; 20 deg gives the same). The real run's
+/// first and 47 off the right shank's site prior, taken, put the shank 18.5 / 18.6 deg worse
+/// than its filter alone over the clip; 0.3 with this; 20 deg gives the same). The real run's
 /// first early answers come steady and are taken at once.
 constexpr double kEarlySteadyDeg = 10.0;
 
