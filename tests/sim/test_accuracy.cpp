@@ -54,16 +54,14 @@ TEST(RealMotion, SixDRigCalibratesFromTheSiteNormals) {
   o.use_mag = false;
   const AccuracyResult r = run_accuracy(o);
   ASSERT_TRUE(r.calibrated) << r.calibration_message;
-  // The segments whose site normal is horizontal: aligned in the N-pose, then refined from
-  // their joints' accelerations within a band (a strap tilted off its normal turns the N-pose
-  // alignment): measured at most +1.5 deg over the ideally aligned filters (N-pose alone: the
-  // right forearm +4.3). Upper arms are not refined (the shoulder girdle is not modelled).
-  for (Segment s :
-       {Segment::pelvis, Segment::torso, Segment::thigh_l, Segment::thigh_r, Segment::shank_l,
-        Segment::shank_r, Segment::forearm_l, Segment::forearm_r, Segment::hand_l, Segment::hand_r})
+  // The segments whose site normal is horizontal: aligned in the N-pose, their facings found
+  // by the mounting motion (N-pose alone: refined from their joints' accelerations within a
+  // band): measured at most +0.2 deg over the ideally aligned filters (N-pose alone: the right
+  // hand +2.1).
+  for (Segment s : {Segment::pelvis, Segment::torso, Segment::thigh_l, Segment::thigh_r,
+                    Segment::shank_l, Segment::shank_r, Segment::upper_arm_l, Segment::upper_arm_r,
+                    Segment::forearm_l, Segment::forearm_r, Segment::hand_l, Segment::hand_r})
     EXPECT_LE(r.metric_segment_deg[index(s)], r.alone_segment_deg[index(s)] + 3.0) << name(s);
-  for (Segment s : {Segment::upper_arm_l, Segment::upper_arm_r})
-    EXPECT_LE(r.metric_segment_deg[index(s)], r.alone_segment_deg[index(s)] + 6.0) << name(s);
   // Head and feet (vertical site normals) are aligned from motion during the walk (their
   // acceleration against the joint centre's from the sensor above): measured 0.9 / 2.0 / 1.9 deg
   // (head by rates, no band-pass or rate limit: 3.5 / 3.1 / 2.3; rate fit for all: 5.4 / 10.3 /
@@ -97,6 +95,23 @@ TEST(RealMotion, SixDAfterAnNPoseAloneKeepsEverySegment) {
           << name << " " << kSegmentNames[s];
       EXPECT_LE(r.max_jump_deg[s], 10.0) << name << " " << kSegmentNames[s];
     }
+  }
+}
+
+// 6D after an N-pose alone: the upper arms' site alignments are refined from the shoulder's
+// acceleration against the torso's (within the refine band, as the other horizontal sites):
+// 01_14 seeds 1-3 left them 3.8-8.0 deg worse than their filters alone without it (a strap
+// tilted off its site normal turns the N-pose alignment), measured 0.1-1.5 with it.
+TEST(RealMotion, SixDUpperArmsAfterAnNPoseAloneAreRefinedFromMotion) {
+  for (uint64_t seed : {1, 2, 3}) {
+    AccuracyOptions o = after_moves(clip("01_14"), seed);
+    o.use_mag = false;
+    o.mounting_motion = false;
+    const AccuracyResult r = run_accuracy(o);
+    ASSERT_TRUE(r.calibrated) << r.calibration_message;
+    for (Segment s : {Segment::upper_arm_l, Segment::upper_arm_r})
+      EXPECT_LE(r.metric_segment_deg[index(s)], r.alone_segment_deg[index(s)] + 2.5)
+          << "seed " << seed << " " << name(s);
   }
 }
 
