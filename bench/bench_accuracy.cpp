@@ -164,9 +164,10 @@ void print_markdown_row(const sim::AccuracyResult& r) {
 /// mocap bench accuracy's command line (declared in add_accuracy).
 struct AccuracyCommandOptions {
   std::string motion = "all", disturbance = "none,both", heading = "normals", mag = "on", clips,
-              seeds, filter_param, sensor_errors, mount = "sites", mounting_motion = "on", dropout;
+              seeds, filter_param, sensor_errors, mount = "sites", mounting_motion = "on", dropout,
+              rig = "full";
   long seed = 1;
-  double rate_hz = 100, frame_rate_hz = 0;
+  double rate_hz = 100, frame_rate_hz = 0, score_after_s = 0;
   bool calibration_moves = false, gyro_scale_calibration = false, warmup = false, ideal = false,
        markdown = false, fused_on_device = false;
 };
@@ -218,6 +219,9 @@ int run_accuracy(const AccuracyCommandOptions& args) {
     base.dropout_segment = all ? sim::AccuracyOptions::kDropoutAll : index(*seg);
   }
   base.fused_on_device = args.fused_on_device;
+  base.score_after_s = args.score_after_s;
+  base.rig =
+      args.rig == "lower" ? sim::AccuracyOptions::Rig::lower_body : sim::AccuracyOptions::Rig::full;
   if (args.ideal) base.sensor = sim::SensorModelParams::ideal();
   if (!args.sensor_errors.empty()) {
     std::string bad;
@@ -336,6 +340,14 @@ void add_accuracy(CLI::App& bench, int& exit_code) {
   c->add_flag("--fused-on-device", o->fused_on_device,
               "the sensors compute their orientation themselves (SlimeVR over UDP): a dropout "
               "drops only the link, their fusion runs on through it");
+  c->add_option("--rig", o->rig,
+                "full: every sensor on the body; lower: the lower body's seven (pelvis, thighs, "
+                "shanks, feet; the others unused and unscored)")
+      ->check(CLI::IsMember({"full", "lower"}));
+  c->add_option("--score-after", o->score_after_s,
+                "seconds into the motion (after the calibration procedure) the scoring and the "
+                "metric's reference instant start; the tracker runs from the calibration on")
+      ->check(CLI::NonNegativeNumber);
   c->add_flag("--markdown", o->markdown, "also print a markdown table on stderr");
   c->callback([o, &exit_code] { exit_code = run_accuracy(*o); });
 }

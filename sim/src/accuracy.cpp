@@ -42,6 +42,23 @@ bool is_measured_three_dof_joint(Segment child) {
   return child != Segment::pelvis && !is_hinge(child) && !is_inferred_joint(child);
 }
 
+bool in_rig(AccuracyOptions::Rig rig, Segment s) {
+  if (Performer::sensor_of(s) < 0) return false;
+  if (rig == AccuracyOptions::Rig::full) return true;
+  switch (s) {
+    case Segment::pelvis:
+    case Segment::thigh_l:
+    case Segment::thigh_r:
+    case Segment::shank_l:
+    case Segment::shank_r:
+    case Segment::foot_l:
+    case Segment::foot_r:
+      return true;
+    default:
+      return false;
+  }
+}
+
 AccuracyResult run_accuracy(const AccuracyOptions& o) {
   PerformerParams pp;
   pp.seed = o.seed;
@@ -53,10 +70,11 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   pp.sensor = o.sensor;
   Performer perf(pp);
   const auto [calib_begin_s, calib_end_s] = perf.calibration_window_s();
-  const double eval_start_s =
+  const double motion_start_s =
       o.calibration_moves ? calib_end_s + calibration_moves_s() : calib_begin_s;
+  const double score_start_s = motion_start_s + o.score_after_s;
   // A disturbance with a time window starts 2 s into the evaluated motion.
-  pp.field.dipoles = disturbance_preset(o.disturbance, o.height_m, eval_start_s + 2.0);
+  pp.field.dipoles = disturbance_preset(o.disturbance, o.height_m, motion_start_s + 2.0);
   if (!pp.field.dipoles.empty()) perf = Performer(pp);
 
   AccuracyResult r;
@@ -72,7 +90,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   // The body tracker, as mocapd builds it for a rig of the performer's sensors.
   std::vector<rig::TrackerSensor> sensors(Performer::kSensorCount);
   for (int id = 0; id < Performer::kSensorCount; ++id) {
-    sensors[id].segment = index(Performer::sensor_segment(id));
+    const Segment seg = Performer::sensor_segment(id);
+    sensors[id].segment = in_rig(o.rig, seg) ? index(seg) : -1;
     sensors[id].fused_on_device = o.fused_on_device;
     if (o.gyro_scale_calibration)
       sensors[id].gyr_scale = calibrated_gyro_scale(perf.sensor_errors(id), o.rate_hz);
@@ -96,8 +115,8 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     return o.use_mag ? out.q_earth_sensor : out.q_earth_sensor_6d;
   };
   std::array<bool, kSegmentCount> scored{};
-  for (int id = 0; id < Performer::kSensorCount; ++id)
-    scored[index(Performer::sensor_segment(id))] = true;
+  for (int s = 0; s < kSegmentCount; ++s)
+    scored[s] = in_rig(o.rig, static_cast<Segment>(s));
   SegmentMetric metric(scored), alone_metric(scored);
 
   const double capture_start_s = calib_begin_s + o.settle_s;
@@ -132,7 +151,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     const int64_t t_ns = to_ns(k * frame_s);
     samples.clear();
     perf.step_to(t_ns, samples);
-    const double dropout_from_s = eval_start_s + o.dropout_start_s;
+    const double dropout_from_s = motion_start_s + o.dropout_start_s;
     const bool dropping =
         k * frame_s >= dropout_from_s && k * frame_s < dropout_from_s + o.dropout_s;
     for (ImuSample& s : samples) {
@@ -166,10 +185,10 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
     if (!r.calibrated) continue;
     tracker.solve(t_ns, frame);
     perf.truth_at(k * frame_s, truth);
-    if (k * frame_s < eval_start_s || !evaluating) {
+    if (k * frame_s < score_start_s || !evaluating) {
       // The calibration moves, and the first frame after them (every sensor must have
       // delivered an orientation since calibration): not evaluated.
-      evaluating = k * frame_s >= eval_start_s;
+      evaluating = k * frame_s >= score_start_s;
       prev_true_root = truth.p_earth_segment_m[0];
       continue;
     }
@@ -185,6 +204,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       alone_metric.add(q_alone, q_true);
       for (int id = 0; id < Performer::kSensorCount; ++id) {
         const int s = index(Performer::sensor_segment(id));
+        if (!scored[s]) continue;
         if (r.frames > 0) {
           const double jump = angle_deg(skeleton.q_earth_segment()[s], prev_est[s]) -
                               angle_deg(q_alone[s], prev_alone[s]);
@@ -201,7 +221,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
         const double e = angle_deg(skeleton.q_parent_segment()[s], truth.q_parent_segment[s]);
         joint_sq[s] += e * e;
         if (o.dropout_segment >= 0 && (s == drop_joint || drop_all)) {
-          const double since_s = k * frame_s - eval_start_s - o.dropout_start_s;
+          const double since_s = k * frame_s - motion_start_s - o.dropout_start_s;
           if (since_s < 0) drop_before_sq += e * e, ++drop_before_n;
           if (since_s >= o.dropout_s + 5.0) drop_after_sq += e * e, ++drop_after_n;
         }
@@ -229,7 +249,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
       incl_sq[id] += std::pow(std::acos(c) * kDegPerRad, 2);
     }
   }
-  if (r.frames == 0) return r;
+  if (r.frames < 2) return r;  // no rotation since the reference instant to score
   r.evaluated_s = r.frames * frame_s;
   if (drop_before_n > 0) r.dropout_joint_before_deg = std::sqrt(drop_before_sq / drop_before_n);
   if (drop_after_n > 0) r.dropout_joint_after_deg = std::sqrt(drop_after_sq / drop_after_n);
@@ -238,7 +258,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   for (int s = 0; s < kSegmentCount; ++s) {
     const Segment seg = static_cast<Segment>(s);
     r.segment_rmse_deg[s] = std::sqrt(seg_sq[s] / r.frames);
-    if (Performer::sensor_of(seg) >= 0) {
+    if (scored[s]) {
       seg_sum += r.segment_rmse_deg[s];
       ++seg_n;
     }
@@ -260,6 +280,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   const Calibration& used = tracker.skeleton().calibration();
   for (int id = 0; id < Performer::kSensorCount; ++id) {
     const int s = index(Performer::sensor_segment(id));
+    if (!scored[s]) continue;
     const Eigen::Quaterniond& q_seg_sensor = perf.mount(id).q_segment_sensor;
     r.mount_yaw_error_deg[s] = yaw_deg(q_seg_sensor * used.q_sensor_segment[s]);
     r.sensor_heading_drift_deg[s] = std::sqrt(heading_sq[id] / r.frames);
