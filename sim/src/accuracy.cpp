@@ -73,7 +73,7 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   const double motion_start_s =
       o.calibration_moves ? calib_end_s + calibration_moves_s() : calib_begin_s;
   const double score_start_s = motion_start_s + o.score_after_s;
-  // A disturbance with a time window starts 2 s into the evaluated motion.
+  // A disturbance with a time window starts 2 s into the motion.
   pp.field.dipoles = disturbance_preset(o.disturbance, o.height_m, motion_start_s + 2.0);
   if (!pp.field.dipoles.empty()) perf = Performer(pp);
 

@@ -69,13 +69,13 @@ struct AccuracyOptions {
   /// seven (pelvis, thighs, shanks, feet: a lab's lower-body set, as the real walk's Xsens
   /// MTw). A sensor off the rig is not on the body (filtered only) and its segment not scored.
   enum class Rig { full, lower_body };
+  Rig rig = Rig::full;
   /// The scoring (and the metric's reference instant) starts this long into the motion that
   /// follows the calibration procedure; the body tracker runs from the calibration on. What a
   /// tracker finds once the person moves (a body heading no site gave, a facing) changes the
   /// alignment after the default reference instant, which the metric counts as an error over
   /// the whole clip; scored from later, the steady state is seen alone. Seconds.
   double score_after_s = 0;
-  Rig rig = Rig::full;
 };
 
 /// Segment s carries a sensor of `rig` (AccuracyOptions::rig).
