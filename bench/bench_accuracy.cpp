@@ -167,7 +167,7 @@ struct AccuracyCommandOptions {
               seeds, filter_param, sensor_errors, mount = "sites", mounting_motion = "on", dropout,
               rig = "full";
   long seed = 1;
-  double rate_hz = 100, frame_rate_hz = 0, score_after_s = 0;
+  double rate_hz = 100, frame_rate_hz = 0, score_after_s = 0, session_s = 0;
   bool calibration_moves = false, gyro_scale_calibration = false, warmup = false, ideal = false,
        markdown = false, fused_on_device = false;
 };
@@ -220,6 +220,7 @@ int run_accuracy(const AccuracyCommandOptions& args) {
   }
   base.fused_on_device = args.fused_on_device;
   base.score_after_s = args.score_after_s;
+  base.session_s = args.session_s;
   base.rig =
       args.rig == "lower" ? sim::AccuracyOptions::Rig::lower_body : sim::AccuracyOptions::Rig::full;
   if (args.ideal) base.sensor = sim::SensorModelParams::ideal();
@@ -348,6 +349,10 @@ void add_accuracy(CLI::App& bench, int& exit_code) {
                 "seconds into the motion (after the calibration procedure) the scoring and the "
                 "metric's reference instant start; the tracker runs from the calibration on")
       ->check(CLI::NonNegativeNumber);
+  c->add_option("--session", o->session_s,
+                "seconds: each BVH clip played back and forth until the motion lasts this long (a "
+                "long session; with --score-after, its end scored alone)")
+      ->check(CLI::PositiveNumber);
   c->add_flag("--markdown", o->markdown, "also print a markdown table on stderr");
   c->callback([o, &exit_code] { exit_code = run_accuracy(*o); });
 }

@@ -99,6 +99,15 @@ double HeadingFromMotion::evidence(int seg) const {
   return seg >= 0 && seg < kSegmentCount && fit_[seg].ref >= 0 ? fit_[seg].evidence : 0.0;
 }
 
+void HeadingFromMotion::reference_turned(int seg, double yaw_rad) {
+  if (seg < 0 || seg >= kSegmentCount) return;
+  Fit& f = fit_[seg];
+  // The reference's later signals turn by yaw_rad: the angles summed so far grow by it.
+  const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
+  f.sum = Eigen::Vector2d(c * f.sum.x() - s * f.sum.y(), s * f.sum.x() + c * f.sum.y());
+  f.ref_v = Eigen::Vector2d(c * f.ref_v.x() - s * f.ref_v.y(), s * f.ref_v.x() + c * f.ref_v.y());
+}
+
 void HeadingFromMotion::applied(int seg, double yaw_rad) {
   if (seg < 0 || seg >= kSegmentCount) return;
   Fit& f = fit_[seg];

@@ -64,8 +64,9 @@ AccuracyResult run_accuracy(const AccuracyOptions& o) {
   pp.seed = o.seed;
   pp.rate_hz = o.rate_hz;
   pp.height_m = o.height_m;
-  pp.motion =
-      (o.warmup ? "warmup+" : "") + (o.calibration_moves ? "calibrate+" + o.motion : o.motion);
+  pp.motion = (o.session_s > 0 ? "session" + std::to_string(o.session_s) + "+" : "") +
+              (o.warmup ? "warmup+" : "") +
+              (o.calibration_moves ? "calibrate+" + o.motion : o.motion);
   pp.loop = false;
   pp.sensor = o.sensor;
   Performer perf(pp);

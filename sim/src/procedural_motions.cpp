@@ -5,6 +5,7 @@
 // about y; left-arm abduction = +angle about x, right-arm abduction = -angle about x.
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <stdexcept>
 
@@ -265,6 +266,21 @@ std::span<const std::string_view> motion_names() {
 }
 
 std::unique_ptr<Motion> make_motion(std::string_view name) {
+  // "session<S>+": a BVH clip played back and forth for at least S seconds.
+  constexpr std::string_view kSession = "session";
+  double session_s = 0;
+  if (name.starts_with(kSession)) {
+    const size_t plus = name.find('+');
+    const std::string digits(name.substr(kSession.size(), plus - kSession.size()));
+    char* end = nullptr;
+    session_s = std::strtod(digits.c_str(), &end);
+    if (plus == std::string_view::npos || digits.empty() || *end != '\0' || !(session_s > 0))
+      throw std::invalid_argument("session<S>+ needs a positive number of seconds, not '" +
+                                  std::string(name) + "'");
+    name.remove_prefix(plus + 1);
+    if (!is_bvh_path(name))
+      throw std::invalid_argument("session<S>+ is for BVH clips, not '" + std::string(name) + "'");
+  }
   std::vector<Clip> clips;
   // A motion after the calibration moves starts from where they end (its own N-pose stand
   // would be a second calibration stand: dropped).
@@ -299,8 +315,9 @@ std::unique_ptr<Motion> make_motion(std::string_view name) {
   if (is_bvh_path(name)) {
     if (!warmup.empty()) throw std::invalid_argument("warmup+ is for the built-in motions");
     // The file's own lead-in stand is the calibration stand unless the procedure comes first.
-    return calibrate ? make_bvh_motion(std::string(name), 0.0, 1.0, make_calibration_procedure())
-                     : make_bvh_motion(std::string(name));
+    return calibrate ? make_bvh_motion(std::string(name), 0.0, 1.0, make_calibration_procedure(),
+                                       session_s)
+                     : make_bvh_motion(std::string(name), 3.0, 1.0, nullptr, session_s);
   }
   if (name == "npose") {
     append({{Clip::kStand, 5.0}});

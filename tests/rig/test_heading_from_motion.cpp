@@ -56,6 +56,37 @@ TEST(HeadingFromMotion, FindsTheYawBetweenCorrelatedRatesAndContinuesAfterItIsAp
   EXPECT_NEAR(yaw, 0, 2 * kDeg);
 }
 
+// The reference's alignment turns (a held pair's headings each follow half the drift): the
+// evidence gathered so far is carried into its new frame, so the estimate moves by the turn
+// at once and stays consistent with the samples that follow.
+TEST(HeadingFromMotion, AReferenceTurnedCarriesTheEvidenceIntoItsNewFrame) {
+  HeadingFromMotion h;
+  h.reset(foot_follows_shank());
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0, 1);
+  const double foot_offset = 20 * kDeg;
+  double ref_offset = 0;
+  int64_t t = 0;
+  const auto feed = [&](int count) {
+    for (int k = 0; k < count; ++k, t += 10'000'000) {
+      const Eigen::Vector3d w(2 * std::sin(t * 5e-8), 0.5 * n(rng), 0.2 * n(rng));
+      h.add_reference(kFoot, yawed(w, ref_offset), t);
+      h.add(kFoot, yawed(w, foot_offset), t);
+    }
+  };
+  feed(1000);
+  double yaw = 0;
+  ASSERT_TRUE(h.estimate(kFoot, yaw));
+  EXPECT_NEAR(yaw, -20 * kDeg, 0.5 * kDeg);
+  ref_offset = -10 * kDeg;
+  h.reference_turned(kFoot, ref_offset);
+  ASSERT_TRUE(h.estimate(kFoot, yaw));
+  EXPECT_NEAR(yaw, -30 * kDeg, 0.5 * kDeg);  // at once, before any new sample
+  feed(1000);
+  ASSERT_TRUE(h.estimate(kFoot, yaw));
+  EXPECT_NEAR(yaw, -30 * kDeg, 0.5 * kDeg);
+}
+
 TEST(HeadingFromMotion, UncorrelatedRatesGiveNoYaw) {
   HeadingFromMotion h;
   h.reset(foot_follows_shank());

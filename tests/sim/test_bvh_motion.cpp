@@ -117,6 +117,60 @@ TEST(BvhMotion, CalibrationProcedureBeforeAFileByName) {
   EXPECT_LT(worst_m, 1e-6);
 }
 
+// "session<S>+FILE.bvh": the clip played back and forth for at least S seconds (a long
+// session). No segment ever turns faster than in the clip played once (the turning points ease
+// through zero speed: no step in any rate, which the virtual gyros would see as a spike), each
+// pass retraces the clip, and two passes bring the performer back where the first began.
+TEST(BvhMotion, ASessionPlaysTheClipBackAndForthWithoutASnap) {
+  const std::string path = temp_bvh("mocap_sim_session_walk_");
+  PerformerParams p;
+  p.motion = "walk";
+  p.loop = false;
+  write_bvh(path, Performer(p));
+  const auto once = std::shared_ptr<const Motion>(make_bvh_motion(path, 3.0, 1.0));
+  const auto session =
+      std::shared_ptr<const Motion>(make_motion("session30+" + path));  // a 8 s clip: 4 passes
+  std::filesystem::remove(path);
+  const double clip_s = once->duration_s() - 4.0;
+  EXPECT_NEAR(session->duration_s(), 4.0 + 4 * clip_s, 1e-9);
+  EXPECT_EQ(session->calibration_window_s(), once->calibration_window_s());
+  const auto largest_step_deg = [](const Motion& m, double from_s, double to_s) {
+    BodyPose a, b;
+    TruthFrame fa, fb;
+    const BodyDimensions dims = *m.dimensions();
+    double worst = 0;
+    m.pose(from_s, a);
+    truth_forward_kinematics(dims, a, fa);
+    for (double t = from_s + 0.002; t <= to_s; t += 0.002) {
+      m.pose(t, b);
+      truth_forward_kinematics(dims, b, fb);
+      for (int s = 0; s < kSegmentCount; ++s)
+        worst = std::max(worst, fa.q_earth_segment[s].angularDistance(fb.q_earth_segment[s]));
+      fa = fb;
+    }
+    return worst * kDegPerRad;
+  };
+  const double once_deg = largest_step_deg(*once, 4.0, once->duration_s());
+  EXPECT_GT(once_deg, 0.1);
+  EXPECT_LE(largest_step_deg(*session, 3.0, session->duration_s()), once_deg * 1.01);
+  // Into the clip from the lead-in, and around the first turning point, at a rate the clip has.
+  EXPECT_LE(largest_step_deg(*session, 3.0, 5.0), once_deg * 1.01);
+  // The second pass retraces the first backward; after two passes it is back at the start.
+  BodyPose a, b;
+  for (double u : {1.0, 3.0, 5.0}) {
+    session->pose(4.0 + u, a);
+    session->pose(4.0 + 2 * clip_s - u, b);
+    EXPECT_LT(a.q_earth_pelvis.angularDistance(b.q_earth_pelvis) * kDegPerRad, 1e-6) << u;
+    EXPECT_LT((a.p_earth_pelvis_m - b.p_earth_pelvis_m).norm(), 1e-9) << u;
+  }
+  session->pose(4.0, a);
+  session->pose(4.0 + 2 * clip_s, b);
+  EXPECT_LT((a.p_earth_pelvis_m - b.p_earth_pelvis_m).norm(), 1e-9);
+  EXPECT_THROW(make_motion("session30+walk"), std::invalid_argument);
+  EXPECT_THROW(make_motion("session+" + path), std::invalid_argument);
+  EXPECT_THROW(make_motion("session-5+" + path), std::invalid_argument);
+}
+
 TEST(BvhMotion, MissingFileIsAnError) {
   EXPECT_THROW(make_bvh_motion("/nonexistent/walk.bvh"), std::runtime_error);
   EXPECT_THROW(make_motion("calibrate+/nonexistent/walk.BVH"), std::runtime_error);

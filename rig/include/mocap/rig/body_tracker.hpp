@@ -209,6 +209,19 @@ class BodyTracker {
   /// how far it has been turned so far, rad.
   std::array<bool, kSegmentCount> refine_{};
   std::array<double, kSegmentCount> turned_rad_{};
+  /// Per segment: its facing settled (a mounting motion's, a knee's axes) and its fit runs on,
+  /// its heading following the fit's drift (HeadingFromMotionOptions::hold_turn_deg_s).
+  std::array<bool, kSegmentCount> hold_{};
+  /// Segment s got a settled facing: its fit from motion holds its heading from now on, or,
+  /// with nothing known above it, stops.
+  void hold_heading(int s);
+  /// A held segment's heading follows its fit's estimate yaw_rad (at the hold's rate).
+  void follow_drift(int s, double yaw_rad);
+  /// Turns segment s's heading by yaw_rad, its fit and the fits against it told.
+  void turn_held(int s, double yaw_rad);
+  /// Segment s's own-frame heading is known from more than a site prior (the mounting motion,
+  /// a knee's axes, motion) and not lost.
+  bool settled(int s) const;
   /// Segment s's sensor lost its own heading frame (heading_lost_after_s): marked lost, fitted
   /// afresh against the nearest known segment above it (or, for the root, a child fitted
   /// against it), its joint holds paused until it is found.

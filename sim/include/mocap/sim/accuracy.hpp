@@ -76,6 +76,11 @@ struct AccuracyOptions {
   /// alignment after the default reference instant, which the metric counts as an error over
   /// the whole clip; scored from later, the steady state is seen alone. Seconds.
   double score_after_s = 0;
+  /// A long session: a BVH clip played back and forth until the motion after the calibration
+  /// lasts at least this long (make_bvh_motion's session_s), so each sensor's drift grows as on
+  /// a person for that long; with score_after_s, the session's end is scored alone. Seconds; 0:
+  /// the clip once.
+  double session_s = 0;
 };
 
 /// Segment s carries a sensor of `rig` (AccuracyOptions::rig).

@@ -38,11 +38,15 @@ class Motion {
 /// `lead_in_s` N-pose stand, a smooth `blend_s` transition into the first frame, then the clip,
 /// interpolated with Catmull-Rom (C1) so the virtual accelerometers see finite accelerations.
 /// The calibration window is the prelude's, else the lead-in. Carries its own root trajectory
-/// and the file's body dimensions. Throws std::runtime_error for unreadable or unrecognisable
-/// files.
+/// and the file's body dimensions. session_s longer than the clip: the clip is played back and
+/// forth (forward, then backward along the same path, easing through zero speed over 1 s at
+/// each turn) until the played part lasts at least session_s: a long session, in which the
+/// sensors' drift grows as it does on a person for that long. Throws std::runtime_error for
+/// unreadable or unrecognisable files.
 std::unique_ptr<Motion> make_bvh_motion(const std::string& path, double lead_in_s = 3.0,
                                         double blend_s = 1.0,
-                                        std::shared_ptr<const Motion> prelude = nullptr);
+                                        std::shared_ptr<const Motion> prelude = nullptr,
+                                        double session_s = 0);
 
 /// Names accepted by make_motion: "npose", "walk", "turn", "squat", "arm_raise", "reach" (each
 /// preceded by a 3 s N-pose stand and followed by a 1 s stand) and "sequence" (all of them
@@ -56,7 +60,9 @@ std::span<const std::string_view> motion_names();
 /// 4 s, then a 1 s stand: calibration_moves_s() in all), then the motion without its own
 /// leading stand. "warmup+<name>" (built-in motions, e.g. "warmup+calibrate+walk"): 22.4 s of
 /// walking there and back first, as when a person puts the sensors on and walks in; the
-/// calibration window is the stand after it.
+/// calibration window is the stand after it. "session<S>+<file>.bvh" (e.g.
+/// "session600+calibrate+take.bvh"): the clip played back and forth for at least S seconds
+/// (make_bvh_motion's session_s).
 std::unique_ptr<Motion> make_motion(std::string_view name);
 
 /// Duration of the calibration moves including their closing 1 s stand, seconds.
