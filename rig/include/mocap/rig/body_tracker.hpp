@@ -22,7 +22,10 @@
 //      gyro lost); each pairs the sample with the segment above's orientation only while
 //      that one is recent (kPartnerFreshNs: a silent sensor's last one would turn this one),
 //   6. in 6D, the heading alignment from motion of the sensors whose facing is still unknown
-//      (heading_from_motion.hpp); a turn far off a found alignment is refused and counted; a
+//      (heading_from_motion.hpp), and by the same fits the headings of the segments whose facing
+//      is settled (the mounting motion's, a knee's axes) held to the settled segment above
+//      through a long session, the pair following the fit's drift half way each
+//      (hold_turn_deg_s); a turn far off a found alignment is refused and counted; a
 //      sensor silent for heading_lost_after_s (unless fused on its device: it ran on), or whose
 //      device restarted (a sample flagged kFlagDeviceRestarted), lost its heading (marked lost
 //      before step 3, and after it turned so that its rotation in the segment above is the one
