@@ -82,8 +82,9 @@ struct HeadingFromMotionOptions {
   /// motion (`mocap bench accuracy --session`), the ideally aligned filters' ratio over a 10 min
   /// session's last minute 0.863 -> 0.504 x (sites), 0.921 -> 0.538 x (random straps); the
   /// clips once, seeds 1-3, 0.966 -> 0.947 / 0.974 -> 0.960 x, worst segment excess 3.06 /
-  /// 3.09 -> 2.72 / 2.76 deg. Rate 0.1 / 0.5 deg/s: worst 2.80 / 3.15 (a head); dead band 4 /
-  /// 1 / 0 deg: 0.959 / 0.949 / 0.958 x (one-sided holds).
+  /// 3.09 -> 2.72 / 2.76 deg. Measured while the held segment alone turned, on the sites: rate
+  /// 0.1 / 0.2 / 0.5 deg/s (dead band 4) worst 2.80 / 2.59 / 3.15 (a head); dead band 4 / 2 /
+  /// 1 / 0 deg (0.2 deg/s) 0.959 / 0.948 / 0.949 / 0.958 x.
   double hold_turn_deg_s = 0.2;
   double hold_dead_band_deg = 2.0;
 };
