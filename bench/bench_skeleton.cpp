@@ -75,8 +75,8 @@ TrackerCost tracker_cost(double& sink, bool use_mag, bool mounting) {
   pp.loop = false;
   sim::Performer perf(pp);
   std::vector<ImuSample> samples;
-  const int kSteps = mounting ? 3600 : 2000;  // 18 / 10 s at 200 Hz
-  for (int k = 1; k <= kSteps; ++k)
+  const int steps = mounting ? 3600 : 2000;  // 18 / 10 s at 200 Hz
+  for (int k = 1; k <= steps; ++k)
     perf.step_to(static_cast<int64_t>(k) * 5'000'000, samples);
   rig::TrackerOptions options;
   options.use_mag = use_mag;
@@ -87,7 +87,7 @@ TrackerCost tracker_cost(double& sink, bool use_mag, bool mounting) {
   std::vector<rig::TrackerSensor> sensors(sim::Performer::kSensorCount);
   for (int i = 0; i < sim::Performer::kSensorCount; ++i)
     sensors[i].segment = index(sim::Performer::sensor_segment(i));
-  const double span_ns = kSteps * 5e6;
+  const double span_ns = steps * 5e6;
   TrackerCost c;
   c.tracker_core_fraction =
       median_ns(5,

@@ -266,10 +266,12 @@ std::span<const std::string_view> motion_names() {
 }
 
 std::unique_ptr<Motion> make_motion(std::string_view name) {
-  // "session<S>+": a BVH clip played back and forth for at least S seconds.
+  // "session<S>+": a BVH clip played back and forth for at least S seconds. Only "session"
+  // followed by a number's first character is the prefix ("session_take.bvh" is a file).
   constexpr std::string_view kSession = "session";
   double session_s = 0;
-  if (name.starts_with(kSession)) {
+  if (name.starts_with(kSession) && name.size() > kSession.size() &&
+      std::string_view("0123456789+-.").find(name[kSession.size()]) != std::string_view::npos) {
     const size_t plus = name.find('+');
     const std::string digits(name.substr(kSession.size(), plus - kSession.size()));
     char* end = nullptr;

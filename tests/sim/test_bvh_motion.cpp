@@ -169,6 +169,8 @@ TEST(BvhMotion, ASessionPlaysTheClipBackAndForthWithoutASnap) {
   EXPECT_THROW(make_motion("session30+walk"), std::invalid_argument);
   EXPECT_THROW(make_motion("session+" + path), std::invalid_argument);
   EXPECT_THROW(make_motion("session-5+" + path), std::invalid_argument);
+  // A file whose name begins with "session" is a file (here one that does not exist).
+  EXPECT_THROW(make_motion("session_take.bvh"), std::runtime_error);
 }
 
 TEST(BvhMotion, MissingFileIsAnError) {
